@@ -1,0 +1,1 @@
+"""Gait Studio desktop application (PySide6). Depends on gaitcore, never the reverse."""

@@ -1,0 +1,11 @@
+"""gaitcore: the algorithms of "Animal gaits from video" (Favreau et al., SCA 2004).
+
+Pure numpy/scipy/OpenCV code with no GUI dependency. The GUI in ``app`` and the ``gaitcore``
+command are both thin layers over this package.
+"""
+
+from gaitcore.errors import GaitInputError
+from gaitcore.image_pca import ImagePCA
+from gaitcore.rbf import RBFPoseMap
+
+__all__ = ["GaitInputError", "ImagePCA", "RBFPoseMap"]
