@@ -1,0 +1,30 @@
+"""Shared fixtures: where test artifacts go and where the real footage lives."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED_DATA = ROOT.parent / "shared" / "data"
+ARTIFACTS = ROOT / "tests" / "_artifacts"
+
+os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
+
+
+@pytest.fixture
+def artifacts_dir() -> Path:
+    """Folder for screenshots and plots that a person should look at after a run."""
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    return ARTIFACTS
+
+
+@pytest.fixture
+def shared_data() -> Path:
+    """The real footage in ../shared/data; skips the test when it is not there."""
+    if not SHARED_DATA.is_dir():
+        pytest.skip(f"real footage not found at {SHARED_DATA} (only present inside the workplace)")
+    return SHARED_DATA
