@@ -1,0 +1,1 @@
+"""File formats: pose tables (CSV), analysis results (JSON), and later BVH and glTF."""

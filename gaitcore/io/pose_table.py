@@ -1,0 +1,112 @@
+"""Pose tables as CSV: a ``frame`` column and one numeric column per pose channel.
+
+Used for the key poses the artist provides (one row per key and alternate frame) and for the
+animation curves ``gaitcore animate`` writes (one row per frame). Angles are in degrees.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from gaitcore.errors import GaitInputError
+
+
+@dataclass(frozen=True, eq=False)
+class PoseTable:
+    """Rows of pose vectors labelled by frame number.
+
+    Attributes
+    ----------
+    frames : ndarray of shape (r,), int
+    columns : tuple of str
+        Channel names, k of them (the ``frame`` column excluded).
+    values : ndarray of shape (r, k), float
+    """
+
+    frames: np.ndarray
+    columns: tuple[str, ...]
+    values: np.ndarray
+
+    def as_dict(self) -> dict[int, np.ndarray]:
+        """Pose vector of each frame."""
+        return {int(f): self.values[i] for i, f in enumerate(self.frames)}
+
+
+def read_pose_table(path: str | Path) -> PoseTable:
+    """Read a pose CSV.
+
+    Raises
+    ------
+    GaitInputError
+        Missing file, no ``frame`` column, no channel column, a non-numeric or missing
+        value (with its line and column), a fractional or negative frame number, or a frame
+        listed twice.
+    """
+    path = Path(path)
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as fh:
+            rows = list(csv.reader(fh))
+    except FileNotFoundError:
+        raise GaitInputError(f"pose file not found: {path}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise GaitInputError(f"cannot read pose file {path}: {exc}") from None
+    rows = [r for r in rows if any(cell.strip() for cell in r)]
+    if not rows:
+        raise GaitInputError(f"pose file {path} is empty; expected a header 'frame,<channel>,...'")
+    header = [h.strip() for h in rows[0]]
+    if not header or header[0] != "frame":
+        raise GaitInputError(
+            f"pose file {path}: the first column must be 'frame', found {header[:1]}"
+        )
+    if len(header) < 2:
+        raise GaitInputError(f"pose file {path} has no channel columns after 'frame'")
+    if len(set(header)) != len(header):
+        raise GaitInputError(f"pose file {path} has duplicate column names")
+    values = np.empty((len(rows) - 1, len(header)))
+    for i, row in enumerate(rows[1:]):
+        line = i + 2
+        if len(row) != len(header):
+            raise GaitInputError(
+                f"pose file {path}, line {line}: {len(row)} values for {len(header)} columns"
+            )
+        for j, cell in enumerate(row):
+            try:
+                values[i, j] = float(cell)
+            except ValueError:
+                raise GaitInputError(
+                    f"pose file {path}, line {line}, column '{header[j]}': "
+                    f"'{cell}' is not a number"
+                ) from None
+    if not np.all(np.isfinite(values)):
+        i, j = np.argwhere(~np.isfinite(values))[0]
+        raise GaitInputError(
+            f"pose file {path}, line {i + 2}, column '{header[j]}': value is missing or NaN; "
+            "every channel of every posed frame needs a number"
+        )
+    frames = values[:, 0]
+    if np.any(frames != np.round(frames)) or np.any(frames < 0):
+        raise GaitInputError(f"pose file {path}: frame numbers must be whole numbers from 0")
+    frames = frames.astype(int)
+    uniq, counts = np.unique(frames, return_counts=True)
+    if np.any(counts > 1):
+        raise GaitInputError(
+            f"pose file {path}: frame {int(uniq[counts > 1][0])} is listed twice; keep one row per frame"
+        )
+    return PoseTable(frames=frames, columns=tuple(header[1:]), values=values[:, 1:])
+
+
+def write_pose_table(path: str | Path, table: PoseTable, *, fps: float | None = None) -> None:
+    """Write a pose CSV (``frame``, optionally ``time_s``, then one column per channel)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    header = ["frame"] + (["time_s"] if fps else []) + list(table.columns)
+    with path.open("w", newline="", encoding="utf-8") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        for f, row in zip(table.frames, table.values):
+            lead = [int(f)] + ([f"{f / fps:.6f}"] if fps else [])
+            w.writerow(lead + [repr(float(v)) for v in row])

@@ -1,0 +1,90 @@
+import numpy as np
+import pytest
+
+from gaitcore import GaitInputError, ImagePCA
+
+
+def _moving_bar(n=40, size=(12, 16)):
+    """A bar whose width oscillates: a small clip with two strong components."""
+    t = np.arange(n)
+    imgs = np.zeros((n,) + size, dtype=bool)
+    for i in t:
+        w = 3 + int(round(3 + 3 * np.sin(2 * np.pi * i / 10)))
+        h = 2 + int(round(3 + 3 * np.cos(2 * np.pi * i / 10)))
+        imgs[i, 1 : 1 + h, 2 : 2 + w] = True
+    return imgs
+
+
+def test_projections_have_unit_variance_and_zero_mean():
+    pca = ImagePCA.fit(_moving_bar(), n_components=3)
+    p = pca.projections
+    assert p.shape == (40, 3)
+    np.testing.assert_allclose(p.mean(axis=0), 0, atol=1e-9)
+    np.testing.assert_allclose(p.var(axis=0), 1, rtol=1e-9)
+
+
+def test_matches_covariance_eigendecomposition():
+    rng = np.random.default_rng(1)
+    imgs = rng.random((15, 4, 5))
+    pca = ImagePCA.fit(imgs, n_components=4)
+    x = imgs.reshape(15, -1)
+    xc = x - x.mean(0)
+    cov = xc.T @ xc / 15
+    evals, evecs = np.linalg.eigh(cov)
+    evals, evecs = evals[::-1][:4], evecs[:, ::-1][:, :4]
+    np.testing.assert_allclose(pca.eigenvalues, evals, rtol=1e-9)
+    # Same subspace, sign aside.
+    np.testing.assert_allclose(np.abs(np.sum(pca.components * evecs.T, axis=1)), 1, atol=1e-9)
+    np.testing.assert_allclose(pca.variance_ratio.sum(), evals.sum() / np.trace(cov), rtol=1e-9)
+
+
+def test_tall_data_uses_svd_and_agrees_with_gram_route():
+    rng = np.random.default_rng(2)
+    wide = rng.random((30, 3, 3))  # n=30 > d=9: SVD route
+    pca = ImagePCA.fit(wide, n_components=3)
+    x = wide.reshape(30, -1)
+    xc = x - x.mean(0)
+    evals = np.linalg.eigvalsh(xc.T @ xc / 30)[::-1][:3]
+    np.testing.assert_allclose(pca.eigenvalues, evals, rtol=1e-9)
+
+
+def test_project_new_frames_equals_fitted_projections():
+    imgs = _moving_bar()
+    pca = ImagePCA.fit(imgs, n_components=2)
+    np.testing.assert_allclose(pca.project(imgs), pca.projections, atol=1e-9)
+    np.testing.assert_allclose(pca.project(imgs[3]), pca.projections[3], atol=1e-9)
+
+
+def test_eigen_images_shape():
+    pca = ImagePCA.fit(_moving_bar(), n_components=2)
+    e = pca.eigen_images()
+    assert e.shape == (2, 3, 12, 16)
+    np.testing.assert_allclose(e[:, 1], pca.mean.reshape(12, 16)[None].repeat(2, 0))
+
+
+def test_uint8_masks_are_scaled_like_bool():
+    imgs = _moving_bar()
+    a = ImagePCA.fit(imgs, n_components=2)
+    b = ImagePCA.fit(imgs.astype(np.uint8) * 255, n_components=2)
+    np.testing.assert_allclose(a.projections, b.projections, atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    "images, message",
+    [
+        (np.zeros((1, 4, 4)), "at least 2 frames"),
+        (np.ones((6, 4, 4)), "identical"),
+        (np.zeros((4, 4)), "shape"),
+        (np.full((3, 2, 2), np.nan), "NaN"),
+    ],
+)
+def test_bad_input(images, message):
+    with pytest.raises(GaitInputError, match=message):
+        ImagePCA.fit(images)
+
+
+def test_keeps_at_most_the_available_components():
+    imgs = np.zeros((3, 4, 4))
+    imgs[1, 0, 0] = 1
+    imgs[2, 1, 1] = 1
+    assert ImagePCA.fit(imgs, n_components=5).n_components == 2
