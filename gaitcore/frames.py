@@ -1,0 +1,541 @@
+"""Frame sources: video files, animated GIFs and folders of images (paper Section 2.2 input).
+
+A :class:`FrameSource` gives random access to the frames of a clip, with a small bounded
+cache, and streams them in order without holding the clip in memory. ``open_frames`` picks
+the backend from the path; every failure to read becomes a one-line ``GaitInputError``.
+
+Frames are BGR ``uint8`` arrays of shape (rows, cols, 3), numbered from 0 at the first frame
+of the (possibly trimmed) clip; ``FrameSource.source_index`` maps back to the file.
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+import re
+import struct
+import threading
+from collections import OrderedDict
+from pathlib import Path
+from typing import Iterator
+
+import cv2
+import numpy as np
+
+from gaitcore.errors import GaitInputError
+
+IMAGE_SUFFIXES = frozenset(
+    {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm", ".pbm", ".jp2"}
+)
+# Files that operating systems and tools drop into folders; never frames, silently skipped.
+_JUNK_NAMES = frozenset({"thumbs.db", "desktop.ini"})
+
+
+class _VideoReader:
+    """Sequential decoder over one ``cv2.VideoCapture`` that seeks only when it must."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.cap = cv2.VideoCapture(str(path))
+        if not self.cap.isOpened():
+            if path.suffix.lower() == ".gif":
+                raise GaitInputError(
+                    f"cannot open GIF {path}: it is damaged, or this OpenCV has no FFmpeg "
+                    "backend (needed for GIF); export its frames (ffmpeg -i IN.gif %05d.png) "
+                    "and open the folder"
+                )
+            raise GaitInputError(
+                f"cannot open video {path}: the file is truncated, damaged or in a container "
+                "OpenCV cannot read; re-encode it (e.g. ffmpeg -i IN -c:v libx264 OUT.mp4)"
+            )
+        self.next_index = 0
+
+    def read(self, index: int) -> np.ndarray | None:
+        if index != self.next_index:
+            self.cap.set(cv2.CAP_PROP_POS_FRAMES, index)
+        ok, frame = self.cap.read()
+        self.next_index = index + 1 if ok else -1
+        return frame if ok else None
+
+    def close(self) -> None:
+        self.cap.release()
+
+
+class FrameSource:
+    """Frames of a clip with random access, a bounded cache and streaming iteration.
+
+    Use :func:`open_frames` to make one.
+
+    Attributes
+    ----------
+    path : Path
+        The video file or image folder.
+    start, stop : int
+        The clip is source frames ``start`` (included) to ``stop`` (excluded).
+    fps : float or None
+        Frame rate from the video header; None for image folders unless given.
+
+    Notes
+    -----
+    Thread safety: ``frame`` may be called from one thread while another iterates, because
+    iteration opens its own decoder.
+    """
+
+    def __init__(
+        self,
+        path: Path,
+        *,
+        files: list[Path] | None,
+        n_source: int,
+        size: tuple[int, int],
+        fps: float | None,
+        start: int,
+        stop: int,
+        cache_frames: int,
+    ) -> None:
+        self.path = path
+        self._files = files
+        self.n_source = n_source
+        self._size = size
+        self.fps = fps
+        self.start = start
+        self.stop = stop
+        self._cache: OrderedDict[int, np.ndarray] = OrderedDict()
+        self._cache_frames = max(0, int(cache_frames))
+        self._lock = threading.Lock()
+        self._reader: _VideoReader | None = None
+
+    # -- basic properties -------------------------------------------------------------
+    def __len__(self) -> int:
+        return self.stop - self.start
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """Frame size as (width, height) in pixels."""
+        return self._size
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        """Shape of one frame array: (rows, cols, 3)."""
+        return self._size[1], self._size[0], 3
+
+    @property
+    def is_video(self) -> bool:
+        return self._files is None
+
+    def source_index(self, i: int) -> int:
+        """Index in the file or folder of clip frame ``i``."""
+        return self.start + i
+
+    def __repr__(self) -> str:
+        kind = "video" if self.is_video else "image folder"
+        return (
+            f"FrameSource({kind} {self.path.name!r}, frames {self.start}:{self.stop}, "
+            f"size {self._size[0]}x{self._size[1]}, fps {self.fps})"
+        )
+
+    # -- access -----------------------------------------------------------------------
+    def frame(self, i: int) -> np.ndarray:
+        """Return clip frame ``i`` (negative counts from the end).
+
+        Returns
+        -------
+        ndarray of shape (rows, cols, 3), uint8
+            BGR image. Treat it as read-only: it may be shared with the cache.
+
+        Raises
+        ------
+        IndexError
+            When ``i`` is outside the clip.
+        GaitInputError
+            When the frame cannot be decoded.
+        """
+        n = len(self)
+        if not -n <= i < n:
+            raise IndexError(f"frame {i} is outside the clip of {n} frames")
+        i = int(i) % n
+        with self._lock:
+            hit = self._cache.get(i)
+            if hit is not None:
+                self._cache.move_to_end(i)
+                return hit
+            if self._files is not None:
+                img = _read_image(self._files[self.start + i], self._size)
+            else:
+                if self._reader is None:
+                    self._reader = _VideoReader(self.path)
+                img = self._reader.read(self.start + i)
+                if img is None:
+                    raise GaitInputError(
+                        f"frame {self.start + i} of {self.path} cannot be decoded: the file is "
+                        "truncated or damaged; trim the clip before it (stop=) or re-encode it"
+                    )
+                _check_size(img, self._size, f"frame {self.start + i} of {self.path}")
+            img.flags.writeable = False
+            if self._cache_frames:
+                self._cache[i] = img
+                while len(self._cache) > self._cache_frames:
+                    self._cache.popitem(last=False)
+            return img
+
+    def __getitem__(self, i: int) -> np.ndarray:
+        return self.frame(i)
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        for _, img in self.iter_frames():
+            yield img
+
+    def iter_frames(
+        self, start: int = 0, stop: int | None = None, *, prefetch: int = 0
+    ) -> Iterator[tuple[int, np.ndarray]]:
+        """Stream ``(i, frame)`` for clip frames ``start <= i < stop`` in order.
+
+        Frames are decoded one at a time by a decoder of their own (not the random-access
+        one), so memory stays constant whatever the clip length.
+
+        Parameters
+        ----------
+        start, stop : int
+            Clip frame range (``stop=None``: to the end).
+        prefetch : int
+            When positive, decode on a background thread up to this many frames ahead, so
+            that decoding overlaps the caller's work (OpenCV releases the GIL).
+
+        Raises
+        ------
+        GaitInputError
+            When a frame cannot be decoded (truncated file).
+        """
+        if prefetch > 0:
+            return _prefetched(self._iter_frames(start, stop), prefetch)
+        return self._iter_frames(start, stop)
+
+    def _iter_frames(self, start: int, stop: int | None) -> Iterator[tuple[int, np.ndarray]]:
+        n = len(self)
+        stop = n if stop is None else min(int(stop), n)
+        start = max(0, int(start))
+        if self._files is not None:
+            for i in range(start, stop):
+                yield i, _read_image(self._files[self.start + i], self._size)
+            return
+        reader = _VideoReader(self.path)
+        try:
+            if start + self.start:
+                reader.cap.set(cv2.CAP_PROP_POS_FRAMES, self.start + start)
+            for i in range(start, stop):
+                ok, img = reader.cap.read()
+                if not ok:
+                    raise GaitInputError(
+                        f"frame {self.start + i} of {self.path} cannot be decoded: the file is "
+                        f"truncated or damaged; trim the clip with stop={self.start + i} or "
+                        "re-encode it"
+                    )
+                _check_size(img, self._size, f"frame {self.start + i} of {self.path}")
+                yield i, img
+        finally:
+            reader.close()
+
+    def close(self) -> None:
+        """Release the random-access decoder and empty the cache."""
+        with self._lock:
+            if self._reader is not None:
+                self._reader.close()
+                self._reader = None
+            self._cache.clear()
+
+    def __enter__(self) -> "FrameSource":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def open_frames(
+    path: str | os.PathLike,
+    *,
+    start: int = 0,
+    stop: int | None = None,
+    fps: float | None = None,
+    cache_frames: int = 16,
+) -> FrameSource:
+    """Open a video file, an animated GIF or a folder of images as a clip.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        A video file (anything OpenCV's FFmpeg backend decodes, GIF included) or a folder of
+        images (PNG, JPEG, BMP, TIFF, WebP...) read in name order.
+    start, stop : int
+        Trim the clip to source frames ``start <= f < stop`` (``stop=None``: to the end),
+        e.g. to keep only the part showing the gait.
+    fps : float, optional
+        Frame rate to use instead of the file's (image folders have none).
+    cache_frames : int
+        How many decoded frames ``FrameSource.frame`` keeps (least recently used dropped).
+
+    Returns
+    -------
+    FrameSource
+
+    Raises
+    ------
+    GaitInputError
+        Missing path; unreadable, truncated or undecodable file; zero frames; empty folder;
+        non-image files or images of different sizes in a folder; a bad frame range.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise GaitInputError(f"{p} does not exist: give the path of a video file or image folder")
+    if p.is_dir():
+        files = list_image_files(p)
+        first = _read_image(files[0], None)
+        size = (int(first.shape[1]), int(first.shape[0]))
+        _check_folder_sizes(files, size)
+        n_source = len(files)
+        s0, s1 = _check_range(start, stop, n_source, p)
+        return FrameSource(p, files=files, n_source=n_source, size=size, fps=fps,
+                           start=s0, stop=s1, cache_frames=cache_frames)
+    return _open_video(p, start, stop, fps, cache_frames)
+
+
+def list_image_files(folder: Path) -> list[Path]:
+    """Image files of ``folder`` sorted by name, subfolders and hidden files ignored.
+
+    Numbers in names compare by value, so ``f2.png`` comes before ``f10.png``.
+
+    Raises
+    ------
+    GaitInputError
+        When the folder holds no image, or holds files that are not images.
+    """
+    images, others = [], []
+    for entry in sorted(folder.iterdir(), key=_natural_key):
+        if entry.is_dir() or entry.name.startswith(".") or entry.name.lower() in _JUNK_NAMES:
+            continue
+        (images if entry.suffix.lower() in IMAGE_SUFFIXES else others).append(entry)
+    if others:
+        names = ", ".join(q.name for q in others[:3]) + (" ..." if len(others) > 3 else "")
+        raise GaitInputError(
+            f"folder {folder} holds {len(others)} file(s) that are not images ({names}): "
+            "move them out so that only the frames remain"
+        )
+    if not images:
+        raise GaitInputError(f"folder {folder} is empty: put the frames in it as image files")
+    return images
+
+
+def read_mask_folder(path: str | os.PathLike) -> np.ndarray:
+    """Read a folder of binary masks, one image per frame, in name order.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        Folder of images where the subject is white (any colour channel above 127) and the
+        background black; palette PNGs work too.
+
+    Returns
+    -------
+    ndarray of shape (n, rows, cols), bool
+
+    Raises
+    ------
+    GaitInputError
+        Missing or empty folder, non-image files, unreadable images, images of different sizes.
+    """
+    p = Path(path)
+    if not p.is_dir():
+        raise GaitInputError(f"{p} is not a folder: give the folder that holds the mask images")
+    files = list_image_files(p)
+    first = _read_mask(files[0])
+    out = np.empty((len(files),) + first.shape, dtype=bool)
+    out[0] = first
+    for k, f in enumerate(files[1:], start=1):
+        m = _read_mask(f)
+        if m.shape != first.shape:
+            raise GaitInputError(
+                f"mask {f.name} is {m.shape[1]}x{m.shape[0]} but {files[0].name} is "
+                f"{first.shape[1]}x{first.shape[0]}: all masks must have the same size"
+            )
+        out[k] = m
+    return out
+
+
+# -- helpers ---------------------------------------------------------------------------
+def _natural_key(p: Path) -> list:
+    return [(0, int(part), "") if part.isdigit() else (1, 0, part.lower())
+            for part in re.split(r"(\d+)", p.name)]
+
+
+def _prefetched(items: Iterator, depth: int) -> Iterator:
+    """Run ``items`` on a daemon thread, ``depth`` items ahead; errors reach the consumer."""
+    q: queue.Queue = queue.Queue(maxsize=depth)
+    stop = threading.Event()
+    done = object()
+
+    def work() -> None:
+        try:
+            for item in items:
+                while not stop.is_set():
+                    try:
+                        q.put(item, timeout=0.05)
+                        break
+                    except queue.Full:
+                        pass
+                if stop.is_set():
+                    break
+            else:
+                q.put(done)
+        except BaseException as exc:  # noqa: BLE001 - re-raised in the consuming thread
+            q.put(exc)
+        finally:
+            items.close()
+
+    thread = threading.Thread(target=work, name="gaitcore-decode", daemon=True)
+    thread.start()
+    try:
+        while (item := q.get()) is not done:
+            if isinstance(item, BaseException):
+                raise item
+            yield item
+    finally:
+        stop.set()
+        while thread.is_alive():  # unblock a producer waiting on a full queue
+            try:
+                q.get_nowait()
+            except queue.Empty:
+                thread.join(timeout=0.05)
+
+
+def _open_video(p: Path, start: int, stop: int | None, fps: float | None,
+                cache_frames: int) -> FrameSource:
+    reader = _VideoReader(p)
+    try:
+        cap = reader.cap
+        first = reader.read(0)
+        if first is None and int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 0:
+            raise GaitInputError(f"{p} holds no frames (an empty video): choose another file")
+        if first is None:
+            code = int(cap.get(cv2.CAP_PROP_FOURCC))
+            fourcc = "".join(chr((code >> (8 * k)) & 0xFF) for k in range(4)).strip("\0 ")
+            raise GaitInputError(
+                f"{p} opens but none of its frames decode (codec {fourcc or 'unknown'}, or no "
+                "video stream): re-encode it to H.264 or MJPEG, or export the frames as images"
+            )
+        size = (int(first.shape[1]), int(first.shape[0]))
+        header_fps = float(cap.get(cv2.CAP_PROP_FPS))
+        n_header = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+        n_source = n_header if n_header > 0 else _count_frames(reader)
+        s0, s1 = _check_range(start, stop, n_source, p)
+        # A header may promise frames that a truncated file no longer holds: check the last
+        # frame of the clip now rather than fail in the middle of an analysis.
+        if reader.read(s1 - 1) is None:
+            n_real = _count_frames(reader)
+            raise GaitInputError(
+                f"{p} is truncated: its header says {n_source} frames but only {n_real} decode; "
+                f"open it with stop={n_real} or re-encode it"
+            )
+    finally:
+        reader.close()
+    if fps is None and header_fps > 0 and np.isfinite(header_fps):
+        fps = header_fps
+    return FrameSource(p, files=None, n_source=n_source, size=size, fps=fps,
+                       start=s0, stop=s1, cache_frames=cache_frames)
+
+
+def _count_frames(reader: _VideoReader) -> int:
+    reader.cap.set(cv2.CAP_PROP_POS_FRAMES, 0)
+    n = 0
+    while reader.cap.grab():
+        n += 1
+    reader.next_index = -1
+    return n
+
+
+def _check_range(start: int, stop: int | None, n: int, p: Path) -> tuple[int, int]:
+    if n <= 0:
+        raise GaitInputError(f"{p} holds no frames: choose another file")
+    s1 = n if stop is None else int(stop)
+    s0 = int(start)
+    if not 0 <= s0 < s1 <= n:
+        raise GaitInputError(
+            f"frame range {start}:{stop} does not fit {p}, which has {n} frames: "
+            f"choose 0 <= start < stop <= {n}"
+        )
+    return s0, s1
+
+
+def _check_size(img: np.ndarray, size: tuple[int, int] | None, what: str) -> None:
+    if size is not None and (img.shape[1], img.shape[0]) != size:
+        raise GaitInputError(
+            f"{what} is {img.shape[1]}x{img.shape[0]} but the clip is {size[0]}x{size[1]}: "
+            "all frames must have the same size; resize or remove it"
+        )
+
+
+def _read_image(f: Path, size: tuple[int, int] | None) -> np.ndarray:
+    img = cv2.imread(str(f), cv2.IMREAD_COLOR)
+    if img is None:
+        raise GaitInputError(f"image {f} cannot be read: it is damaged or not an image; "
+                             "replace or remove it")
+    _check_size(img, size, f"image {f.name}")
+    return img
+
+
+def _read_mask(f: Path) -> np.ndarray:
+    img = cv2.imread(str(f), cv2.IMREAD_UNCHANGED)
+    if img is None:
+        raise GaitInputError(f"mask {f} cannot be read: it is damaged or not an image; "
+                             "replace or remove it")
+    if img.ndim == 3:
+        img = img[:, :, :3].max(axis=2)
+    if img.dtype != np.uint8:
+        scale = 255.0 / np.iinfo(img.dtype).max if img.dtype.kind in "ui" else 255.0
+        img = img.astype(np.float32) * scale
+    return img > 127
+
+
+def _check_folder_sizes(files: list[Path], size: tuple[int, int]) -> None:
+    """Compare every image's size with ``size``, reading only headers where possible."""
+    for f in files[1:]:
+        got = _header_size(f)
+        if got != size:  # unusual format, or a mismatch to confirm: decode it
+            img = cv2.imread(str(f), cv2.IMREAD_UNCHANGED)
+            if img is None:
+                raise GaitInputError(f"image {f} cannot be read: it is damaged or not an image; "
+                                     "replace or remove it")
+            got = (int(img.shape[1]), int(img.shape[0]))
+        if got != size:
+            raise GaitInputError(
+                f"image {f.name} is {got[0]}x{got[1]} but {files[0].name} is {size[0]}x{size[1]}: "
+                "all frames of a folder must have the same size"
+            )
+
+
+def _header_size(f: Path) -> tuple[int, int] | None:
+    """(width, height) from a PNG or JPEG header without decoding, None if not found."""
+    try:
+        with open(f, "rb") as fh:
+            head = fh.read(26)
+            if head[:8] == b"\x89PNG\r\n\x1a\n" and head[12:16] == b"IHDR":
+                w, h = struct.unpack(">II", head[16:24])
+                return int(w), int(h)
+            if head[:2] != b"\xff\xd8":
+                return None
+            fh.seek(2)
+            while True:
+                marker = fh.read(2)
+                if len(marker) < 2 or marker[0] != 0xFF:
+                    return None
+                code = marker[1]
+                if code == 0xFF:  # fill byte
+                    fh.seek(-1, 1)
+                    continue
+                if code in (0xD8, 0x01) or 0xD0 <= code <= 0xD7:
+                    continue
+                (length,) = struct.unpack(">H", fh.read(2))
+                if 0xC0 <= code <= 0xCF and code not in (0xC4, 0xC8, 0xCC):
+                    _, h, w = struct.unpack(">BHH", fh.read(5))
+                    return int(w), int(h)
+                fh.seek(length - 2, 1)
+    except (OSError, struct.error):
+        return None
