@@ -1,0 +1,115 @@
+"""``analysis.json``: the result of ``gaitcore analyze``, read back by ``gaitcore animate``.
+
+The file is plain JSON (never pickle). Frame numbers are 0-based in source order.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from gaitcore.errors import GaitInputError
+from gaitcore.pipeline import Analysis
+
+FORMAT = "gaitstudio-analysis"
+VERSION = 1
+
+
+def analysis_to_dict(analysis: Analysis, *, source: str = "") -> dict:
+    """The JSON-ready content of ``analysis.json`` (see DESIGN.md, Contracts)."""
+    d = analysis.diagnosis
+    s = analysis.settings
+    pcs = s.pcs
+    out = {
+        "format": FORMAT,
+        "version": VERSION,
+        "source": source,
+        "n_frames": analysis.n_frames,
+        "pcs": pcs,
+        "keys": s.keys,
+        "alpha": s.alpha,
+        "roi_size": list(analysis.pca.image_shape),
+        "variance_ratio": [float(v) for v in analysis.pca.variance_ratio],
+        "correlations": [float(r) for r in d.correlations],
+        "usable": d.verdict.value == "usable",
+        "verdict": d.verdict.value,
+        "reason": d.reason,
+        "period_frames": float(d.period_frames),
+        "f0": float(d.f0),
+        "band": [float(b) for b in d.band],
+        "key_frames": [int(f) for f in analysis.key_frames],
+        "condition_number": float(analysis.selection.condition_number),
+        "exact": bool(analysis.selection.exact),
+        "lost_frames": list(analysis.lost_frames),
+        "projections": np.round(analysis.coords, 10).tolist(),
+        "filtered_projections": np.round(d.filtered[:, :pcs], 10).tolist(),
+        "loop_angle": np.round(analysis.loop_angle, 10).tolist(),
+    }
+    if analysis.alternate_frames is not None:
+        out["alternate_frames"] = [int(f) for f in analysis.alternate_frames]
+    return out
+
+
+def write_analysis_json(path: str | Path, analysis: Analysis, *, source: str = "") -> None:
+    """Write ``analysis.json`` atomically (a temporary file renamed over the target)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(json.dumps(analysis_to_dict(analysis, source=source), indent=1))
+    tmp.replace(path)
+
+
+@dataclass(frozen=True, eq=False)
+class AnalysisRecord:
+    """What ``gaitcore animate`` needs from an ``analysis.json``."""
+
+    n_frames: int
+    projections: np.ndarray
+    filtered_projections: np.ndarray
+    loop_angle: np.ndarray
+    key_frames: tuple[int, ...]
+    alternate_frames: tuple[int, ...] | None
+    alpha: float
+
+
+def read_analysis_json(path: str | Path) -> AnalysisRecord:
+    """Read and check an ``analysis.json``.
+
+    Raises
+    ------
+    GaitInputError
+        Missing or malformed file, or inconsistent content.
+    """
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise GaitInputError(f"analysis file not found: {path}; run 'gaitcore analyze' first") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise GaitInputError(f"{path} is not a readable analysis file ({exc})") from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise GaitInputError(f"{path} is not a Gait Studio analysis file")
+    if data.get("version", 0) > VERSION:
+        raise GaitInputError(
+            f"{path} was written by a newer Gait Studio (format version {data['version']}); "
+            "update Gait Studio to read it"
+        )
+    try:
+        n = int(data["n_frames"])
+        proj = np.asarray(data["projections"], dtype=float)
+        filt = np.asarray(data.get("filtered_projections", data["projections"]), dtype=float)
+        theta = np.asarray(data["loop_angle"], dtype=float)
+        keys = tuple(int(f) for f in data["key_frames"])
+        alts = data.get("alternate_frames")
+        alts = None if alts is None else tuple(int(f) for f in alts)
+        alpha = float(data.get("alpha", np.log(2.0)))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise GaitInputError(f"{path} is missing or has a malformed field: {exc}") from None
+    if proj.ndim != 2 or proj.shape[0] != n or filt.shape != proj.shape or theta.shape != (n,):
+        raise GaitInputError(f"{path}: projections do not match n_frames = {n}")
+    if not keys or any(not 0 <= f < n for f in keys + (alts or ())):
+        raise GaitInputError(f"{path}: key frames must lie in 0..{n - 1}")
+    return AnalysisRecord(n, proj, filt, theta, keys, alts, alpha)

@@ -1,0 +1,285 @@
+"""The paper's pipeline from silhouettes to animation, as two steps a script or the GUI runs.
+
+``analyze_silhouettes``: ROI crops -> PCA -> spectral diagnosis -> key-image selection ->
+(optionally) alternates for the switching models. ``animate``: key poses -> a pose per frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Callable
+
+import cv2
+import numpy as np
+
+from gaitcore.errors import GaitInputError
+from gaitcore.image_pca import ImagePCA
+from gaitcore.keyimages import KeySelection, select_key_images
+from gaitcore.rbf import DEFAULT_ALPHA, RBFPoseMap
+from gaitcore.silhouette import RoiClip
+from gaitcore.spectrum import Diagnosis, diagnose
+from gaitcore.switching import SwitchingModel, loop_angle, propose_alternates
+
+Progress = Callable[[int, int], bool]
+
+N_DIAGNOSIS_PCS = 5
+"""Components kept for the spectral diagnosis table, whatever the number used to animate."""
+
+
+@dataclass(frozen=True)
+class AnalysisSettings:
+    """Choices of the analysis step.
+
+    Attributes
+    ----------
+    pcs : int
+        Principal components used for key selection and interpolation (the paper's c; 2).
+    keys : int
+        Key-images to select (the paper's m; 4 for runs, 4 + 4 alternates for walks).
+    switching : bool
+        Propose alternates and animate with switching models (walks).
+    alpha : float
+        RBF kernel width.
+    max_side_px : int or None
+        ROI crops are shrunk (area averaging) so their longer side is at most this, to keep
+        PCA cheap on long clips; None keeps full resolution.
+    key_time_limit_s : float or None
+        Time budget of the exact key search; past it the best set found is used and the
+        result is reported as not proven optimal.
+    pinned, forbidden : tuple of int
+        Frames the artist forces into, or out of, the key set.
+    """
+
+    pcs: int = 2
+    keys: int = 4
+    switching: bool = False
+    alpha: float = DEFAULT_ALPHA
+    max_side_px: int | None = 160
+    key_time_limit_s: float | None = 60.0
+    pinned: tuple[int, ...] = ()
+    forbidden: tuple[int, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.pcs < 1:
+            raise GaitInputError(f"--pcs must be at least 1, got {self.pcs}")
+        if self.keys < 1:
+            raise GaitInputError(f"--keys must be at least 1, got {self.keys}")
+        if self.max_side_px is not None and self.max_side_px < 8:
+            raise GaitInputError(f"working size must be at least 8 pixels, got {self.max_side_px}")
+
+
+@dataclass(frozen=True, eq=False)
+class Analysis:
+    """Everything the analysis step computes about a clip.
+
+    Attributes
+    ----------
+    settings : AnalysisSettings
+    pca : ImagePCA
+        Fitted on the frames where the subject was found.
+    projections : ndarray of shape (n, C)
+        Normalized PCA coordinates of every frame (C = min(5, available) components); lost
+        frames are interpolated in time and listed in ``lost_frames``.
+    lost_frames : tuple of int
+    diagnosis : Diagnosis
+    selection : KeySelection
+    loop_angle : ndarray of shape (n,)
+        Unwrapped angle around the (PC1, PC2) loop of the filtered trajectory.
+    alternate_frames : tuple of int or None
+        One per key, in key order, when switching is on.
+    """
+
+    settings: AnalysisSettings
+    pca: ImagePCA
+    projections: np.ndarray
+    lost_frames: tuple[int, ...]
+    diagnosis: Diagnosis
+    selection: KeySelection
+    loop_angle: np.ndarray
+    alternate_frames: tuple[int, ...] | None = field(default=None)
+
+    @property
+    def n_frames(self) -> int:
+        return int(self.projections.shape[0])
+
+    @property
+    def coords(self) -> np.ndarray:
+        """The c coordinates used for keys and interpolation, shape (n, pcs)."""
+        return self.projections[:, : self.settings.pcs]
+
+    @property
+    def key_frames(self) -> tuple[int, ...]:
+        return self.selection.frames
+
+    @property
+    def posed_frames(self) -> tuple[int, ...]:
+        """Every frame the artist must pose: keys, then alternates when switching."""
+        return self.key_frames + (self.alternate_frames or ())
+
+
+def working_images(roi: RoiClip, max_side_px: int | None) -> np.ndarray:
+    """ROI crops as float images in [0, 1], shrunk so the longer side is at most max_side_px.
+
+    Returns
+    -------
+    ndarray of shape (n, rows, cols), float32
+    """
+    crops = roi.crops
+    rows, cols = crops.shape[1:]
+    scale = 1.0 if max_side_px is None else min(1.0, max_side_px / max(rows, cols))
+    if scale >= 1.0:
+        return crops.astype(np.float32)
+    size = (max(1, round(cols * scale)), max(1, round(rows * scale)))
+    return np.stack(
+        [cv2.resize(c.astype(np.float32), size, interpolation=cv2.INTER_AREA) for c in crops]
+    )
+
+
+def analyze_silhouettes(
+    roi: RoiClip,
+    settings: AnalysisSettings = AnalysisSettings(),
+    *,
+    sketched: bool = False,
+    progress: Progress | None = None,
+) -> Analysis:
+    """Run PCA, diagnosis, key selection and (optionally) alternates on tracked silhouettes.
+
+    Parameters
+    ----------
+    roi : RoiClip
+        Fixed-size binary crops of the subject, one per frame.
+    settings : AnalysisSettings
+    sketched : bool
+        The silhouettes come from sketches (changes the advice of an unusable diagnosis).
+    progress : callable(done, total) -> bool, optional
+        Reports the key search; returning False cancels with ``InterruptedError``.
+
+    Raises
+    ------
+    GaitInputError
+        Too few frames for the requested keys, no motion, too few distinct silhouettes.
+    """
+    n = roi.crops.shape[0]
+    found = np.nonzero(~roi.lost)[0]
+    if found.size < max(settings.keys, 2) + 1:
+        raise GaitInputError(
+            f"only {found.size} frame(s) with a subject for {settings.keys} key-images; "
+            "use a longer clip or fewer keys"
+        )
+    images = working_images(roi, settings.max_side_px)
+    pca = ImagePCA.fit(images[found], n_components=max(N_DIAGNOSIS_PCS, settings.pcs))
+    proj = np.empty((n, pca.n_components))
+    proj[found] = pca.projections
+    if found.size < n:
+        for k in range(pca.n_components):
+            proj[:, k] = np.interp(np.arange(n), found, pca.projections[:, k])
+    lost = tuple(int(t) for t in np.nonzero(roi.lost)[0])
+    diag_input = proj if proj.shape[1] >= 2 else np.column_stack([proj, np.zeros(n)])
+    diagnosis = diagnose(diag_input, sketched=sketched)
+    theta = loop_angle(diagnosis.filtered)
+    for arr in (proj, theta):
+        arr.setflags(write=False)
+    motion = Analysis(
+        settings=settings,
+        pca=pca,
+        projections=proj,
+        lost_frames=lost,
+        diagnosis=diagnosis,
+        selection=KeySelection(frames=(), condition_number=float("nan"), exact=False, nodes_visited=0),
+        loop_angle=theta,
+    )
+    return rekey(motion, settings, progress=progress)
+
+
+def rekey(
+    analysis: Analysis, settings: AnalysisSettings, *, progress: Progress | None = None
+) -> Analysis:
+    """Select key-images (and alternates) again with new settings, reusing the PCA.
+
+    Changing the number of components or keys, or pinning a frame, needs no new PCA: this
+    is what the GUI calls when the artist turns those knobs.
+
+    Raises
+    ------
+    GaitInputError
+        More components than the analysis kept, or a key selection that is impossible.
+    """
+    if settings.pcs > analysis.projections.shape[1]:
+        raise GaitInputError(
+            f"the clip has only {analysis.projections.shape[1]} independent silhouette "
+            f"change(s) for --pcs {settings.pcs}; use fewer components or a clip with more motion"
+        )
+    coords = analysis.projections[:, : settings.pcs]
+    selection = select_key_images(
+        coords,
+        settings.keys,
+        alpha=settings.alpha,
+        pinned=settings.pinned,
+        forbidden=tuple(sorted(set(settings.forbidden) | set(analysis.lost_frames))),
+        progress=progress,
+        time_limit_s=settings.key_time_limit_s,
+    )
+    alternates = None
+    if settings.switching:
+        alternates = propose_alternates(coords, selection.frames, theta=analysis.loop_angle)
+    return replace(analysis, settings=settings, selection=selection, alternate_frames=alternates)
+
+
+def animate(
+    coords: np.ndarray,
+    key_frames: tuple[int, ...],
+    poses: dict[int, np.ndarray],
+    *,
+    alternate_frames: tuple[int, ...] | None = None,
+    theta: np.ndarray | None = None,
+    alpha: float = DEFAULT_ALPHA,
+    clamp: tuple[float, float] | None = None,
+) -> np.ndarray:
+    """Pose of every frame by RBF interpolation of the posed key-images.
+
+    Parameters
+    ----------
+    coords : ndarray of shape (n, c)
+        PCA coordinates driving the animation (raw or band-pass filtered).
+    key_frames : tuple of int
+    poses : dict of int to ndarray of shape (k,)
+        Pose vector of every key (and alternate) frame.
+    alternate_frames : tuple of int, optional
+        With ``theta``, animate with switching models (paper Section 3.2).
+    theta : ndarray of shape (n,), optional
+        Loop angle, required for switching.
+    alpha, clamp
+        RBF kernel width and optional weight clamp.
+
+    Returns
+    -------
+    ndarray of shape (n, k)
+
+    Raises
+    ------
+    GaitInputError
+        A key without a pose, poses of different lengths, or a singular system.
+    """
+    needed = tuple(key_frames) + tuple(alternate_frames or ())
+    missing = [f for f in needed if f not in poses]
+    if missing:
+        raise GaitInputError(
+            f"the key poses lack frame(s) {missing}; add a row for every key"
+            + (" and alternate" if alternate_frames else "")
+            + " frame"
+        )
+    lengths = {np.asarray(poses[f]).shape for f in needed}
+    if len(lengths) != 1:
+        raise GaitInputError("every key pose must have the same channels")
+    coords = np.asarray(coords, dtype=float)
+    if alternate_frames:
+        if theta is None:
+            raise GaitInputError("switching models need the loop angle of every frame")
+        model = SwitchingModel.fit(
+            coords, theta, key_frames, alternate_frames, poses, alpha=alpha, clamp=clamp
+        )
+        return model.predict(coords, theta)
+    rbf = RBFPoseMap.fit(
+        coords[list(key_frames)], np.stack([poses[f] for f in key_frames]), alpha=alpha, clamp=clamp
+    )
+    return rbf.predict(coords)
