@@ -1,0 +1,97 @@
+"""BVH export of animation curves on a skeleton (Biovision hierarchy, read by Blender, Maya...).
+
+The hierarchy follows the skeleton's joints; rotation channels are written in the skeleton's
+order, Zrotation Xrotation Yrotation (R = Rz Rx Ry, as in :mod:`gaitcore.skeleton`). The root
+has OFFSET 0 0 0 and absolute position channels, the convention most importers expect.
+Lengths are in the skeleton's units (metres), angles in degrees.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from gaitcore.errors import GaitInputError
+from gaitcore.io.pose_table import PoseTable
+from gaitcore.skeleton import Skeleton
+
+_BVH_CHANNEL = {
+    "tx": "Xposition", "ty": "Yposition", "tz": "Zposition",
+    "rz": "Zrotation", "rx": "Xrotation", "ry": "Yrotation",
+}
+
+
+def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: float = 24.0) -> None:
+    """Write the poses of ``table`` on ``skeleton`` as a BVH file.
+
+    Parameters
+    ----------
+    path : str or Path
+    skeleton : Skeleton
+    table : PoseTable
+        One row per frame, with a column for every channel of the skeleton (extra columns
+        are ignored).
+    fps : float
+        Frame rate written as ``Frame Time: 1/fps``.
+
+    Raises
+    ------
+    GaitInputError
+        When the table lacks some of the skeleton's channels.
+    """
+    index = {c: i for i, c in enumerate(table.columns)}
+    missing = [c for c in skeleton.channel_names if c not in index]
+    if missing:
+        raise GaitInputError(
+            f"the curves lack {len(missing)} channel(s) of skeleton '{skeleton.name}' "
+            f"(first: {', '.join(missing[:3])}); pose every joint of the skeleton"
+        )
+    if not fps > 0:
+        raise GaitInputError(f"frame rate must be positive, got {fps}")
+    children: dict[str, list[int]] = {}
+    for i, j in enumerate(skeleton.joints):
+        children.setdefault(j.parent or "", []).append(i)
+    lines = ["HIERARCHY"]
+    columns: list[np.ndarray] = []
+
+    def emit(i: int, depth: int) -> None:
+        j = skeleton.joints[i]
+        pad = "  " * depth
+        kids = children.get(j.name, [])
+        if not j.channels and not kids:
+            lines.append(f"{pad}End Site")
+            lines.append(f"{pad}{{")
+            lines.append(f"{pad}  OFFSET {_fmt(j.offset)}")
+            lines.append(f"{pad}}}")
+            return
+        head = "ROOT" if j.parent is None else "JOINT"
+        offset = (0.0, 0.0, 0.0) if j.parent is None else j.offset
+        lines.append(f"{pad}{head} {j.name}")
+        lines.append(f"{pad}{{")
+        lines.append(f"{pad}  OFFSET {_fmt(offset)}")
+        channels = j.channels or ("rz", "rx", "ry")
+        lines.append(f"{pad}  CHANNELS {len(channels)} " + " ".join(_BVH_CHANNEL[c] for c in channels))
+        for c in channels:
+            name = f"{j.name}.{c}"
+            col = table.values[:, index[name]] if name in index else np.zeros(len(table.frames))
+            if c.startswith("t"):
+                col = col + j.offset["xyz".index(c[1])]
+            columns.append(col)
+        for k in kids:
+            emit(k, depth + 1)
+        lines.append(f"{pad}}}")
+
+    emit(children[""][0], 0)
+    lines.append("MOTION")
+    lines.append(f"Frames: {len(table.frames)}")
+    lines.append(f"Frame Time: {1.0 / fps:.8f}")
+    motion = np.column_stack(columns) if columns else np.zeros((len(table.frames), 0))
+    lines.extend(" ".join(f"{v:.6f}" for v in row) for row in motion)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def _fmt(v) -> str:
+    return " ".join(f"{float(x):.6f}" for x in v)

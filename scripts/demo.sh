@@ -1,0 +1,14 @@
+#!/bin/sh
+# The headless demo: render a synthetic horse canter, analyse its silhouettes, pose the
+# chosen key-images with the true poses, animate, and report how close the result is.
+set -eu
+bin=$1
+out=$2
+export PYOPENGL_PLATFORM="${PYOPENGL_PLATFORM:-egl}"
+"$bin/gaitcore" synth --gait canter --frames 100 --out "$out/clip"
+"$bin/gaitcore" analyze "$out/clip/masks" --out "$out/analysis" --keys 4 --pcs 2
+"$bin/python" scripts/demo_pose_keys.py "$out/analysis/analysis.json" "$out/clip/poses.csv" "$out/keys.csv"
+"$bin/gaitcore" animate "$out/analysis/analysis.json" --key-poses "$out/keys.csv" \
+    --out "$out/curves.csv" --bvh "$out/canter.bvh" --skeleton "$out/clip/skeleton.json"
+"$bin/python" scripts/demo_pose_keys.py --compare "$out/curves.csv" "$out/clip/poses.csv" "$out/clip/skeleton.json"
+echo "demo output in $out (curves.csv, canter.bvh, analysis/analysis.json, clip/images)"

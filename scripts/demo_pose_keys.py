@@ -1,0 +1,41 @@
+"""Demo helper: stand in for the artist by posing the key-images with the true poses, and
+compare the animation with the truth afterwards.
+
+    python scripts/demo_pose_keys.py ANALYSIS.json POSES.csv KEYS.csv
+    python scripts/demo_pose_keys.py --compare CURVES.csv POSES.csv SKELETON.json
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import numpy as np
+
+from gaitcore.evaluate import angle_error_deg
+from gaitcore.io.pose_table import PoseTable, read_pose_table, write_pose_table
+from gaitcore.skeleton import Skeleton
+
+
+def pose_keys(analysis_path: str, poses_path: str, out_path: str) -> None:
+    analysis = json.loads(open(analysis_path, encoding="utf-8").read())
+    frames = analysis["key_frames"] + analysis.get("alternate_frames", [])
+    truth = read_pose_table(poses_path)
+    rows = [int(np.nonzero(truth.frames == f)[0][0]) for f in frames]
+    write_pose_table(out_path, PoseTable(np.asarray(frames), truth.columns, truth.values[rows]))
+    print(f"posed key-images {frames} with the true poses -> {out_path}")
+
+
+def compare(curves_path: str, poses_path: str, skeleton_path: str) -> None:
+    curves, truth = read_pose_table(curves_path), read_pose_table(poses_path)
+    idx = Skeleton.from_json(skeleton_path).sagittal_angle_indices
+    err = angle_error_deg(curves.values[:, idx], truth.values[:, idx])
+    print(f"joint angles about the image normal: mean |error| {err.mean():.2f} deg, "
+          f"std {err.std():.2f} deg over {len(idx)} angles x {len(truth.frames)} frames")
+
+
+if __name__ == "__main__":
+    if sys.argv[1] == "--compare":
+        compare(*sys.argv[2:5])
+    else:
+        pose_keys(*sys.argv[1:4])
