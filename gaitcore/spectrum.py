@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+from scipy.special import gammaln
 
 from gaitcore.errors import GaitInputError
 
@@ -34,6 +35,9 @@ PAD_FACTOR = 16
 
 MIN_FFT_LENGTH = 4096
 """Shortest zero-padded FFT, so that short clips still get a smooth spectrum to plot."""
+
+PERIODICITY_ALPHA = 0.01
+"""PC1 must hold a rhythm at this significance (Fisher's g test) for a clip to be usable."""
 
 QUIET_CORRELATION = 0.3
 """In the paper's good clips r3..r5 stay at or below this; higher values earn a note."""
@@ -95,6 +99,7 @@ class Diagnosis:
     filtered: np.ndarray
     frequencies: np.ndarray
     amplitudes: np.ndarray
+    periodicity_p: float
     verdict: Verdict
     reason: str
 
@@ -186,7 +191,8 @@ def diagnose(
 
     filtered_n = band_pass(xn, band, centre=f0)
     correlations = np.array([_pearson(xn[:, k], filtered_n[:, k]) for k in range(c)])
-    verdict, reason = _explain(correlations, f0, band, n, threshold, sketched)
+    p_value = fisher_periodicity_p(centered[:, 0])
+    verdict, reason = _explain(correlations, f0, band, n, threshold, sketched, p_value)
     return Diagnosis(
         f0=float(f0),
         fb=float(fb),
@@ -196,9 +202,38 @@ def diagnose(
         filtered=filtered_n * scale,
         frequencies=frequencies,
         amplitudes=amplitudes_n * scale,
+        periodicity_p=p_value,
         verdict=verdict,
         reason=reason,
     )
+
+
+def fisher_periodicity_p(signal: np.ndarray) -> float:
+    """Probability that white noise has a periodogram peak as dominant as ``signal``'s.
+
+    Parameters
+    ----------
+    signal : ndarray of shape (n,)
+        Mean-removed trajectory.
+
+    Returns
+    -------
+    float
+        p-value of Fisher's g test (Fisher 1929): g is the largest periodogram ordinate over
+        the sum of the ordinates at the Fourier frequencies 1..(n-1)//2 (DC and Nyquist
+        excluded); small p means a real rhythm.
+    """
+    power = np.abs(np.fft.rfft(signal)[1 : (len(signal) - 1) // 2 + 1]) ** 2
+    m = power.size
+    total = power.sum()
+    if m < 2 or total <= 0:
+        return 1.0
+    g = power.max() / total
+    j = np.arange(1, int(np.floor(1.0 / g)) + 1)
+    j = j[j * g < 1.0]
+    log_binom = gammaln(m + 1) - gammaln(j + 1) - gammaln(m - j + 1)
+    terms = (-1.0) ** (j - 1) * np.exp(log_binom + (m - 1) * np.log1p(-j * g))
+    return float(np.clip(terms.sum(), 0.0, 1.0))
 
 
 def band_pass(
@@ -401,6 +436,7 @@ def _explain(
     n: int,
     threshold: float,
     sketched: bool,
+    p_value: float,
 ) -> tuple[Verdict, str]:
     """The verdict and the sentence an artist reads (paper Section 5.2, last paragraph).
 
@@ -416,6 +452,13 @@ def _explain(
             f"frames) repeats only {cycles:.1f} times in this {n}-frame clip, and at least "
             "1.5 cycles are needed. Use a longer clip of a steady gait; if the animal drifts "
             "(walks towards the camera, the camera pans), cut a part where it stays side-on."
+        )
+    if p_value > PERIODICITY_ALPHA:
+        return Verdict.NOT_USABLE, (
+            f"No rhythm found: the strongest frequency of PC1 is no stronger than chance "
+            f"(Fisher's test p = {p_value:.2g}), so the silhouettes do not change with a gait "
+            "cycle. Check that they show the animal (not noise or the background), or choose a "
+            "clip of a steady gait seen from the side."
         )
     figures = f"r1 = {r[0]:.2f}, r2 = {r[1]:.2f}"
     if r[0] >= threshold and r[1] >= threshold:
