@@ -89,7 +89,8 @@ def _run_analyze(args: argparse.Namespace) -> int:
         forbidden=args.forbid,
         key_time_limit_s=args.key_time_limit,
     )
-    roi = load_silhouettes(args.input, args.out, subject=args.subject, background=args.background)
+    roi = load_silhouettes(args.input, args.out, subject=args.subject, background=args.background,
+                           max_side=settings.max_side_px)
     analysis = analyze_silhouettes(roi, settings)
     write_analysis_json(args.out / "analysis.json", analysis, source=str(args.input))
     if args.json:

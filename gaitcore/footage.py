@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from gaitcore.errors import GaitInputError
-from gaitcore.frames import list_image_files, read_mask_folder
+from gaitcore.frames import iter_mask_folder, list_image_files
 from gaitcore.model import Rect
 from gaitcore.silhouette import RoiClip, crop_rois
 
@@ -50,6 +50,7 @@ def load_silhouettes(
     *,
     subject: Sequence[Rect] = (),
     background: Sequence[Rect] = (),
+    max_side: int | None = 160,
     progress: Progress | None = None,
 ) -> RoiClip:
     """Tracked, fixed-size silhouettes of the subject in every frame of ``source``.
@@ -62,6 +63,9 @@ def load_silhouettes(
         For colour footage, the computed masks are written to ``out_dir/masks/00000.png``...
     subject, background : sequence of Rect
         Rectangles on the first frame, required for colour footage.
+    max_side : int or None
+        Longer side of the ROI crops (they are shrunk to it), which bounds memory on long
+        clips; None keeps the source resolution.
     progress : callable(done, total) -> bool, optional
 
     Raises
@@ -73,7 +77,7 @@ def load_silhouettes(
     if not source.exists():
         raise GaitInputError(f"{source} does not exist: give a video file, an image folder or a mask folder")
     if is_mask_folder(source):
-        return crop_rois(read_mask_folder(source), progress=progress)
+        return crop_rois(iter_mask_folder(source), max_side=max_side, progress=progress)
     if not subject or not background:
         raise GaitInputError(
             f"{source} is colour footage: give at least one --subject and one --background "
@@ -90,4 +94,4 @@ def load_silhouettes(
 
     with open_frames(source) as frames:
         return segment_clip(frames, list(subject), list(background), progress=progress,
-                            mask_sink=write_mask)
+                            mask_sink=write_mask, max_side=max_side)

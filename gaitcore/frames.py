@@ -336,28 +336,53 @@ def read_mask_folder(path: str | os.PathLike) -> np.ndarray:
     Returns
     -------
     ndarray of shape (n, rows, cols), bool
+        The whole stack in memory (n * rows * cols bytes): for long clips prefer
+        :func:`iter_mask_folder`, which ``crop_rois`` consumes one mask at a time.
 
     Raises
     ------
     GaitInputError
         Missing or empty folder, non-image files, unreadable images, images of different sizes.
     """
+    files = _mask_files(path)
+    first = _read_mask(files[0])
+    out = np.empty((len(files),) + first.shape, dtype=bool)
+    for k, m in enumerate(_iter_masks(files, first)):
+        out[k] = m
+    return out
+
+
+def iter_mask_folder(path: str | os.PathLike) -> Iterator[np.ndarray]:
+    """Stream the masks of a folder, as ``read_mask_folder`` does but one at a time.
+
+    The folder's listing and the first mask are checked at once; a mask of another size
+    raises ``GaitInputError`` when reached.
+
+    Yields
+    ------
+    ndarray of shape (rows, cols), bool
+    """
+    files = _mask_files(path)
+    return _iter_masks(files, _read_mask(files[0]))
+
+
+def _mask_files(path: str | os.PathLike) -> list[Path]:
     p = Path(path)
     if not p.is_dir():
         raise GaitInputError(f"{p} is not a folder: give the folder that holds the mask images")
-    files = list_image_files(p)
-    first = _read_mask(files[0])
-    out = np.empty((len(files),) + first.shape, dtype=bool)
-    out[0] = first
-    for k, f in enumerate(files[1:], start=1):
+    return list_image_files(p)
+
+
+def _iter_masks(files: list[Path], first: np.ndarray) -> Iterator[np.ndarray]:
+    yield first
+    for f in files[1:]:
         m = _read_mask(f)
         if m.shape != first.shape:
             raise GaitInputError(
                 f"mask {f.name} is {m.shape[1]}x{m.shape[0]} but {files[0].name} is "
                 f"{first.shape[1]}x{first.shape[0]}: all masks must have the same size"
             )
-        out[k] = m
-    return out
+        yield m
 
 
 # -- helpers ---------------------------------------------------------------------------

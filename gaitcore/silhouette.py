@@ -309,6 +309,53 @@ def crop_rois(
     return acc.finish(margin=margin, max_side=max_side)
 
 
+def fill_holes(mask: np.ndarray) -> np.ndarray:
+    """Fill the holes of a binary mask (flood fill of the outside from the border).
+
+    Parameters
+    ----------
+    mask : ndarray of shape (rows, cols), uint8 (0/1)
+
+    Returns
+    -------
+    ndarray of shape (rows, cols), uint8 (0/1)
+
+    Notes
+    -----
+    Part of the paper's "standard morphological analysis" (Section 2.2).
+    """
+    h, w = mask.shape
+    flood = np.zeros((h + 2, w + 2), np.uint8)
+    flood[1:-1, 1:-1] = mask
+    cv2.floodFill(flood, np.zeros((h + 4, w + 4), np.uint8), (0, 0), 1)
+    return (mask | (1 - flood[1:-1, 1:-1])).astype(np.uint8)
+
+
+def keep_overlapping(mask: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """The connected component of ``mask`` that overlaps ``reference`` most.
+
+    Parameters
+    ----------
+    mask : ndarray of shape (rows, cols), uint8 (0/1)
+    reference : ndarray of shape (rows, cols)
+        E.g. the silhouette predicted from the previous frame (non-zero is inside).
+
+    Returns
+    -------
+    ndarray of shape (rows, cols), uint8 (0/1)
+        That component; the largest one when none overlaps.
+    """
+    n, labels = cv2.connectedComponents(mask, connectivity=8)
+    if n <= 2:
+        return mask
+    overlap = np.bincount(labels[reference > 0], minlength=n)
+    overlap[0] = 0
+    if overlap.max() == 0:
+        overlap = np.bincount(labels.ravel(), minlength=n)
+        overlap[0] = 0
+    return (labels == int(np.argmax(overlap))).astype(np.uint8)
+
+
 def _paste(window: np.ndarray, tight: np.ndarray, x: int, y: int) -> None:
     """OR ``tight`` into ``window`` with its top-left corner at (x, y), clipped."""
     h, w = window.shape

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from gaitcore.errors import GaitInputError
-from gaitcore.frames import open_frames, read_mask_folder
+from gaitcore.frames import iter_mask_folder, open_frames, read_mask_folder
 from gaitcore.model import Rect, Stroke
 
 W, H = 64, 48
@@ -209,6 +209,7 @@ def test_read_mask_folder(tmp_path):
     masks = read_mask_folder(folder)
     assert masks.shape == (3, H, W) and masks.dtype == bool
     assert masks[2, 15, 7] and not masks[0, 15, 16] and masks.sum() == 300
+    assert np.array_equal(np.stack(list(iter_mask_folder(folder))), masks)
 
 
 def test_read_mask_folder_bad_inputs(tmp_path):
@@ -220,6 +221,10 @@ def test_read_mask_folder_bad_inputs(tmp_path):
     cv2.imwrite(str(folder / "1.png"), np.zeros((H, W + 1), np.uint8))
     with pytest.raises(GaitInputError, match="same size"):
         read_mask_folder(folder)
+    stream = iter_mask_folder(folder)
+    assert next(stream).shape == (H, W)
+    with pytest.raises(GaitInputError, match="same size"):
+        next(stream)
     (folder / "1.png").unlink()
     (folder / "readme.md").write_text("x")
     with pytest.raises(GaitInputError, match="not images"):

@@ -7,7 +7,14 @@ import numpy as np
 import pytest
 
 from gaitcore.errors import GaitInputError
-from gaitcore.silhouette import RoiAccumulator, SubjectTracker, crop_rois, track_subject
+from gaitcore.silhouette import (
+    RoiAccumulator,
+    SubjectTracker,
+    crop_rois,
+    fill_holes,
+    keep_overlapping,
+    track_subject,
+)
 
 
 def moving_disc(n: int = 8, *, rows: int = 60, cols: int = 90, radius: int = 8,
@@ -97,3 +104,17 @@ def test_accumulator_memory_is_bit_packed():
     acc.add(crop, np.array([0, 0, 160, 200]), np.array([80.0, 100.0]))
     bits, shape, _ = acc._items[0]
     assert bits.nbytes == 200 * 160 // 8 and shape == (200, 160)
+
+
+def test_fill_holes_and_keep_overlapping():
+    ring = np.zeros((20, 20), np.uint8)
+    cv2.circle(ring, (10, 10), 7, 1, 2)
+    filled = fill_holes(ring)
+    assert filled[10, 10] == 1 and filled[0, 0] == 0 and filled.sum() > ring.sum()
+    two = np.zeros((10, 30), np.uint8)
+    two[2:8, 2:8] = 1
+    two[2:5, 20:23] = 1
+    ref = np.zeros_like(two)
+    ref[3, 21] = 1
+    assert keep_overlapping(two, ref).sum() == 9
+    assert keep_overlapping(two, np.zeros_like(two)).sum() == 36
