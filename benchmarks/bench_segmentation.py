@@ -3,10 +3,11 @@
 - Mean IoU on DAVIS "bear" of the paper's plain mixture model ("gmm") and of the default
   method ("grabcut"), from rectangles drawn on the first frame only.
 - Throughput of segmentation + ROI on the same 854x480 frames, beside the bare decode rate.
-- Peak resident memory while segmenting a generated 10,000-frame 640x480 video, measured in a
-  fresh subprocess (``VmHWM`` of /proc/self/status) so that the baseline is clean.
+- Peak resident memory of the whole ``gaitcore analyze`` of a generated 10,000-frame 640x480
+  video, measured in a fresh subprocess (``VmHWM`` of /proc/self/status) so that the
+  baseline is clean.
 
-Run ``python -m benchmarks.bench_segmentation`` to print the tables.
+Run ``python -m benchmarks segmentation`` to print the tables.
 """
 
 from __future__ import annotations
@@ -79,13 +80,17 @@ def long_clip_memory(n_frames: int = LONG_FRAMES) -> Section:
         path = Path(tmp) / "long.mp4"
         subject, background = write_long_video(path, n_frames)
         result = _measure_in_subprocess(path, subject, background)
+    if result["status"] != 0:
+        raise RuntimeError(f"gaitcore analyze failed on the long clip (status {result['status']})")
     rows = [[n_frames, f"{LONG_W}x{LONG_H}", "grabcut", round(result["peak_mb"]),
              round(result["baseline_mb"]), round(result["seconds"], 1),
              round(n_frames / result["seconds"], 1), result["lost"]]]
-    notes = ["target: peak RSS < 1500 MB; measured as VmHWM of a fresh subprocess that opens "
-             "the video, segments it and cuts the ROI windows (max_side 160)",
+    notes = ["target: peak RSS < 1500 MB; measured as VmHWM of a fresh subprocess running the "
+             "whole `gaitcore analyze` (decode, segment, ROI, PCA, diagnosis, key selection, "
+             "masks written to disk)",
              "baseline = VmHWM after imports, before segmenting"]
-    return Section("Memory on a long clip (generated mp4v video)", headers, rows, notes)
+    return Section("Memory of a whole analysis on a long clip (generated mp4v video)", headers,
+                   rows, notes)
 
 
 def write_long_video(path: Path, n_frames: int, *, seed: int = 0) -> tuple[list, list]:
@@ -109,9 +114,8 @@ def write_long_video(path: Path, n_frames: int, *, seed: int = 0) -> tuple[list,
 
 
 _CHILD = r"""
-import json, sys, time
-from gaitcore.frames import open_frames
-from gaitcore.segmentation import segment_clip
+import io, json, sys, time, contextlib
+from gaitcore.cli import main
 
 def vmhwm_mb():
     for line in open("/proc/self/status"):
@@ -119,19 +123,25 @@ def vmhwm_mb():
             return int(line.split()[1]) / 1024
 base = vmhwm_mb()
 path, subject, background = sys.argv[1], json.loads(sys.argv[2]), json.loads(sys.argv[3])
+args = ["analyze", path, "--out", sys.argv[4], "--json"]
+args += [a for r in subject for a in ("--subject", ",".join(map(str, r)))]
+args += [a for r in background for a in ("--background", ",".join(map(str, r)))]
 t0 = time.perf_counter()
-with open_frames(path) as source:
-    roi = segment_clip(source, subject, background)
+out = io.StringIO()
+with contextlib.redirect_stdout(out):
+    status = main(args)
 seconds = time.perf_counter() - t0
+result = json.loads(out.getvalue()) if status == 0 else {}
 print(json.dumps({"peak_mb": vmhwm_mb(), "baseline_mb": base, "seconds": seconds,
-                  "lost": int(roi.lost.sum()), "crops": list(roi.crops.shape)}))
+                  "lost": len(result.get("lost_frames", [])), "status": status}))
 """
 
 
 def _measure_in_subprocess(path: Path, subject: list, background: list) -> dict:
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     out = subprocess.run(
-        [sys.executable, "-c", _CHILD, str(path), json.dumps(subject), json.dumps(background)],
+        [sys.executable, "-c", _CHILD, str(path), json.dumps(subject), json.dumps(background),
+         str(path.parent / "analysis")],
         check=True, capture_output=True, text=True, env=env,
     )
     return json.loads(out.stdout.strip().splitlines()[-1])

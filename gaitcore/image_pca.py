@@ -11,6 +11,14 @@ from gaitcore.errors import GaitInputError
 _EIG_EPS = 1e-10
 """Eigenvalues below this fraction of the largest are treated as zero (no variance)."""
 
+DENSE_LIMIT = 30_000_000
+"""Above this many values (frames x pixels) the data is never copied to one float matrix:
+the components come from a randomized SVD that streams the frames in chunks (long clips)."""
+
+_CHUNK_ROWS = 512
+_OVERSAMPLE = 10
+_POWER_ITERS = 4
+
 
 @dataclass(frozen=True, eq=False)
 class ImagePCA:
@@ -67,12 +75,17 @@ class ImagePCA:
         -----
         Paper equations (1)-(5). The eigenvectors come from the SVD of the centred data
         matrix I (n x d) through the n x n Gram matrix I I^T when n < d, so the d x d
-        covariance is never formed.
+        covariance is never formed. Clips larger than ``DENSE_LIMIT`` values (long clips) use
+        a randomized SVD streaming the frames in chunks, so memory does not grow with n x d.
         """
-        x = _as_float_stack(images)
-        n = x.shape[0]
+        arr = np.asarray(images)
+        _check_stack(arr)
         if n_components < 1:
             raise GaitInputError(f"n_components must be at least 1, got {n_components}")
+        if arr.shape[0] * arr.shape[1] * arr.shape[2] > DENSE_LIMIT:
+            return cls._fit_streamed(arr, n_components)
+        x = _as_float_stack(arr)
+        n = x.shape[0]
         mean = x.mean(axis=0)
         x -= mean
         if x.shape[0] <= x.shape[1]:
@@ -83,10 +96,7 @@ class ImagePCA:
             evals = np.maximum(evals, 0.0)
             keep = evals > _EIG_EPS * max(evals[0], np.finfo(float).tiny)
             if not keep.any() or evals[0] <= 0:
-                raise GaitInputError(
-                    "all frames are identical: there is no motion to analyse; check the "
-                    "silhouettes or choose another clip"
-                )
+                raise GaitInputError(_IDENTICAL)
             c = min(n_components, int(keep.sum()))
             sing = np.sqrt(evals[:c])
             comps = (u[:, :c].T @ x) / sing[:, None]
@@ -94,25 +104,74 @@ class ImagePCA:
         else:
             _, sing_all, vt = np.linalg.svd(x, full_matrices=False)
             if sing_all[0] <= 0 or not np.any(sing_all > 0):
-                raise GaitInputError(
-                    "all frames are identical: there is no motion to analyse; check the "
-                    "silhouettes or choose another clip"
-                )
+                raise GaitInputError(_IDENTICAL)
             keep = sing_all**2 > _EIG_EPS * sing_all[0] ** 2
             c = min(n_components, int(keep.sum()))
             sing = sing_all[:c]
             comps = vt[:c]
             total = float((sing_all**2).sum()) / n
-        eigenvalues = sing**2 / n
+        return cls._finish(arr.shape, mean, comps, sing, total, x @ comps.T)
+
+    @classmethod
+    def _fit_streamed(cls, arr: np.ndarray, n_components: int) -> "ImagePCA":
+        """Randomized SVD (Halko, Martinsson and Tropp 2011) over chunks of frames.
+
+        Memory stays at a few chunks of float rows plus (frames + pixels) x (c + 10) floats,
+        whatever the clip's length.
+        """
+        n = arr.shape[0]
+        flat = arr.reshape(n, -1)
+        d = flat.shape[1]
+        mean = np.zeros(d)
+        sq_sum = 0.0
+        for rows in _chunks(flat):
+            mean += rows.sum(axis=0)
+        mean /= n
+        for rows in _chunks(flat):
+            sq_sum += float(((rows - mean) ** 2).sum())
+        total = sq_sum / n
+        if total <= 0:
+            raise GaitInputError(_IDENTICAL)
+        width = min(n_components + _OVERSAMPLE, n, d)
+
+        def times(v: np.ndarray) -> np.ndarray:  # (X - mean) @ v, shape (n, l)
+            out = np.empty((n, v.shape[1]))
+            shift = mean @ v
+            for i, rows in enumerate(_chunks(flat)):
+                out[i * _CHUNK_ROWS : i * _CHUNK_ROWS + rows.shape[0]] = rows @ v - shift
+            return out
+
+        def times_t(u: np.ndarray) -> np.ndarray:  # (X - mean).T @ u, shape (d, l)
+            acc = -np.outer(mean, u.sum(axis=0))
+            for i, rows in enumerate(_chunks(flat)):
+                acc += rows.T @ u[i * _CHUNK_ROWS : i * _CHUNK_ROWS + rows.shape[0]]
+            return acc
+
+        rng = np.random.default_rng(0)
+        q = np.linalg.qr(times(rng.standard_normal((d, width))))[0]
+        for _ in range(_POWER_ITERS):
+            q = np.linalg.qr(times(np.linalg.qr(times_t(q))[0]))[0]
+        _, sing_all, vt = np.linalg.svd(times_t(q).T, full_matrices=False)
+        keep = sing_all**2 > _EIG_EPS * max(sing_all[0] ** 2, np.finfo(float).tiny)
+        c = min(n_components, int(keep.sum()))
+        if c == 0:
+            raise GaitInputError(_IDENTICAL)
+        comps = vt[:c]
+        return cls._finish(arr.shape, mean, comps, sing_all[:c], total, times(comps.T))
+
+    @classmethod
+    def _finish(cls, shape, mean, comps, sing, total, scores) -> "ImagePCA":
+        """Fix signs, normalize projections and freeze the arrays."""
+        eigenvalues = sing**2 / shape[0]
         # Fix the sign of each component so results do not flip between runs or machines:
         # the largest-magnitude pixel of each eigen-image is positive.
-        flip = np.sign(comps[np.arange(c), np.abs(comps).argmax(axis=1)])
-        comps *= flip[:, None]
-        projections = (x @ comps.T) / np.sqrt(eigenvalues)
+        flip = np.sign(comps[np.arange(comps.shape[0]), np.abs(comps).argmax(axis=1)])
+        comps = comps * flip[:, None]
+        projections = scores * flip / np.sqrt(eigenvalues)
         for arr in (mean, comps, eigenvalues, projections):
             arr.setflags(write=False)
         return cls(
-            image_shape=_image_shape(images),
+            image_shape=(int(shape[1]), int(shape[2])),
             mean=mean,
             components=comps,
             eigenvalues=eigenvalues,
@@ -169,13 +228,20 @@ class ImagePCA:
         return out.reshape(self.n_components, 3, *self.image_shape)
 
 
-def _image_shape(images: np.ndarray) -> tuple[int, int]:
-    arr = np.asarray(images)
-    return int(arr.shape[-2]), int(arr.shape[-1])
+_IDENTICAL = (
+    "all frames are identical: there is no motion to analyse; check the silhouettes or "
+    "choose another clip"
+)
 
 
-def _as_float_stack(images: np.ndarray, *, min_frames: int = 2) -> np.ndarray:
-    arr = np.asarray(images)
+def _chunks(flat: np.ndarray):
+    """Rows of ``flat`` as float64 blocks of _CHUNK_ROWS, scaled like :func:`_as_float_stack`."""
+    scale = 255.0 if np.issubdtype(flat.dtype, np.integer) and flat.max(initial=0) > 1 else 1.0
+    for i in range(0, flat.shape[0], _CHUNK_ROWS):
+        yield flat[i : i + _CHUNK_ROWS].astype(float) / scale
+
+
+def _check_stack(arr: np.ndarray, *, min_frames: int = 2) -> None:
     if arr.ndim != 3:
         raise GaitInputError(
             f"expected a stack of images of shape (frames, rows, cols), got shape {arr.shape}"
@@ -186,12 +252,16 @@ def _as_float_stack(images: np.ndarray, *, min_frames: int = 2) -> np.ndarray:
         )
     if arr.shape[1] * arr.shape[2] == 0:
         raise GaitInputError("images are empty (zero rows or columns)")
+    if arr.dtype.kind == "f" and not np.all(np.isfinite(arr)):
+        raise GaitInputError("images contain NaN or infinite values")
+
+
+def _as_float_stack(images: np.ndarray, *, min_frames: int = 2) -> np.ndarray:
+    arr = np.asarray(images)
+    _check_stack(arr, min_frames=min_frames)
     x = arr.reshape(arr.shape[0], -1)
     if x.dtype == bool:
         return x.astype(float)
     if np.issubdtype(x.dtype, np.integer):
         return x.astype(float) / (255.0 if x.max(initial=0) > 1 else 1.0)
-    x = x.astype(float, copy=True)
-    if not np.all(np.isfinite(x)):
-        raise GaitInputError("images contain NaN or infinite values")
-    return x
+    return x.astype(float, copy=True)

@@ -28,6 +28,10 @@ _N_STARTS = 8  # local-search starts, spread over the clip
 _CHUNK = 100_000  # candidate sets tested per batch
 _LEVELWISE_DEPTH = 5  # the last frames to add are grown level by level, not branched on
 _MAX_LEVEL_ROWS = 4_000_000  # memory guard: a larger level is split into branches instead
+MAX_CANDIDATES = 600
+"""Above this many allowed frames (long clips), the candidates are thinned to one frame per
+cell of a grid in PCA space (see :func:`_thin_pool`); the result is then optimal among
+those candidates only and reported with ``exact=False``."""
 
 
 @dataclass(frozen=True)
@@ -328,14 +332,53 @@ def _select(kernel, m, pinned, pool, progress, deadline, seeds=()) -> KeySelecti
     return KeySelection(tuple(sorted(search.best)), search.best_cond, exact, search.nodes)
 
 
-def _prepare(p, alpha, pin, forb, time_limit_s) -> tuple[np.ndarray, np.ndarray, float | None]:
-    """The n×n kernel matrix, the candidate pool and the deadline of a search."""
+def _prepare(
+    p, alpha, pin, forb, time_limit_s
+) -> tuple[np.ndarray, list, np.ndarray, np.ndarray, bool, float | None]:
+    """Kernel matrix over the pinned frames and the candidate pool, and the search's deadline.
+
+    Returns the kernel, the pinned and pool positions in it, the global frame number of each
+    of its rows, whether the pool was thinned, and the deadline.
+    """
     if time_limit_s is not None and not time_limit_s >= 0:
         raise GaitInputError(f"time_limit_s must be a number of seconds >= 0, got {time_limit_s}")
-    kernel = gaussian_kernel(p, p, alpha=alpha)
+    pool = _candidate_pool(p, pin, forb)
+    thinned = pool.size > MAX_CANDIDATES
+    if thinned:
+        pool = _thin_pool(p, pool, MAX_CANDIDATES)
+    rows = np.concatenate([np.asarray(pin, dtype=np.intp), pool])
+    kernel = gaussian_kernel(p[rows], p[rows], alpha=alpha)
     np.fill_diagonal(kernel, 1.0)
     deadline = None if time_limit_s is None else time.monotonic() + time_limit_s
-    return kernel, _candidate_pool(p, pin, forb), deadline
+    local_pin = list(range(len(pin)))
+    local_pool = np.arange(len(pin), rows.size, dtype=np.intp)
+    return kernel, local_pin, local_pool, rows, thinned, deadline
+
+
+def _thin_pool(p: np.ndarray, pool: np.ndarray, limit: int) -> np.ndarray:
+    """At most ``limit`` frames of ``pool``: the first frame of each occupied cell of a grid
+    in PCA space, with the finest cell size that keeps the count under the limit.
+
+    A long clip of a periodic gait runs round the same loop many times, so its frames crowd
+    the same places of PCA space; one frame per small cell keeps the loop's shape.
+    """
+    q = p[pool]
+    span = float(np.ptp(q, axis=0).max()) or 1.0
+    lo, hi = span * 1e-6, span
+    best = pool[:1]
+    for _ in range(40):
+        cell = 0.5 * (lo + hi)
+        _, first = np.unique(np.floor(q / cell), axis=0, return_index=True)
+        if first.size > limit:
+            lo = cell
+        else:
+            hi, best = cell, pool[np.sort(first)]
+    return best
+
+
+def _globalise(sel: KeySelection, rows: np.ndarray, thinned: bool) -> KeySelection:
+    frames = tuple(sorted(int(rows[f]) for f in sel.frames))
+    return KeySelection(frames, sel.condition_number, sel.exact and not thinned, sel.nodes_visited)
 
 
 def select_key_images(
@@ -397,8 +440,8 @@ def select_key_images(
     λmax) count as +inf.
     """
     p, pin, forb = _validate(projections, m, alpha, pinned, forbidden)
-    kernel, pool, deadline = _prepare(p, alpha, pin, forb, time_limit_s)
-    return _select(kernel, int(m), pin, pool, progress, deadline)
+    kernel, pin, pool, rows, thinned, deadline = _prepare(p, alpha, pin, forb, time_limit_s)
+    return _globalise(_select(kernel, int(m), pin, pool, progress, deadline), rows, thinned)
 
 
 def condition_curve(
@@ -443,9 +486,9 @@ def condition_curve(
         raise GaitInputError("give at least one number of key-images for the condition curve")
     for m in ms:
         p, pin, forb = _validate(projections, m, alpha, pinned, forbidden)
-    kernel, pool, deadline = _prepare(p, alpha, pin, forb, time_limit_s)
+    kernel, pin, pool, rows, thinned, deadline = _prepare(p, alpha, pin, forb, time_limit_s)
     results: dict[int, KeySelection] = {}
     for m in sorted({int(m) for m in ms}):
         seeds = [list(results[max(results)].frames)] if results else []
         results[m] = _select(kernel, m, pin, pool, None, deadline, seeds)
-    return [results[int(m)] for m in ms]
+    return [_globalise(results[int(m)], rows, thinned) for m in ms]

@@ -118,17 +118,18 @@ class Analysis:
 
 
 def working_images(roi: RoiClip, max_side_px: int | None) -> np.ndarray:
-    """ROI crops as float images in [0, 1], shrunk so the longer side is at most max_side_px.
+    """ROI crops shrunk (area averaging) so that the longer side is at most max_side_px.
 
     Returns
     -------
-    ndarray of shape (n, rows, cols), float32
+    ndarray of shape (n, rows, cols)
+        The crops themselves (bool) when they are small enough, else float32 in [0, 1].
     """
     crops = roi.crops
     rows, cols = crops.shape[1:]
     scale = 1.0 if max_side_px is None else min(1.0, max_side_px / max(rows, cols))
     if scale >= 1.0:
-        return crops.astype(np.float32)
+        return crops
     size = (max(1, round(cols * scale)), max(1, round(rows * scale)))
     return np.stack(
         [cv2.resize(c.astype(np.float32), size, interpolation=cv2.INTER_AREA) for c in crops]

@@ -88,3 +88,18 @@ def test_keeps_at_most_the_available_components():
     imgs[1, 0, 0] = 1
     imgs[2, 1, 1] = 1
     assert ImagePCA.fit(imgs, n_components=5).n_components == 2
+
+
+def test_streamed_randomized_svd_matches_the_dense_route(monkeypatch):
+    import gaitcore.image_pca as module
+
+    imgs = _moving_bar(300, (24, 30)).astype(np.uint8) * 255
+    rng = np.random.default_rng(4)
+    imgs[rng.random(imgs.shape) < 0.02] ^= 255  # some noise so that many components exist
+    dense = ImagePCA.fit(imgs, n_components=4)
+    monkeypatch.setattr(module, "DENSE_LIMIT", 1000)
+    streamed = ImagePCA.fit(imgs, n_components=4)
+    np.testing.assert_allclose(streamed.eigenvalues, dense.eigenvalues, rtol=1e-6)
+    np.testing.assert_allclose(streamed.total_variance, dense.total_variance, rtol=1e-9)
+    np.testing.assert_allclose(streamed.mean, dense.mean, atol=1e-12)
+    np.testing.assert_allclose(np.abs(streamed.projections[:, :2]), np.abs(dense.projections[:, :2]), atol=1e-4)
