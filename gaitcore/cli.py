@@ -126,8 +126,16 @@ def _add_animate(sub) -> None:
                    help="clamp the RBF weights to this range (e.g. -0.2,1.2)")
     p.add_argument("--no-switching", action="store_true",
                    help="ignore the alternates of the analysis and use the keys alone")
-    p.add_argument("--bvh", type=Path, default=None, help="also write a BVH file")
-    p.add_argument("--skeleton", type=Path, default=None, help="skeleton JSON for --bvh")
+    p.add_argument("--bvh", type=Path, default=None, metavar="OUT.bvh",
+                   help="also write a BVH file (needs --skeleton)")
+    p.add_argument("--glb", type=Path, default=None, metavar="OUT.glb",
+                   help="also write a binary glTF with a skinned mesh (needs --skeleton)")
+    p.add_argument("--skeleton", type=Path, default=None, metavar="SKEL.json|SKEL.bvh",
+                   help="joint hierarchy for --bvh/--glb: a skeleton JSON, or a BVH file")
+    p.add_argument("--fps", type=float, default=24.0,
+                   help="frame rate of time_s, the BVH frame time and glTF key times (24)")
+    p.add_argument("--csv-time", action="store_true",
+                   help="add a time_s column (frame / fps) after 'frame' in CURVES.csv")
     p.set_defaults(run=_run_animate)
 
 
@@ -135,13 +143,30 @@ def _run_animate(args: argparse.Namespace) -> int:
     import numpy as np
 
     from gaitcore.io.analysis_file import read_analysis_json
+    from gaitcore.io.export import EXPORTERS, pose_matrix
     from gaitcore.io.pose_table import PoseTable, read_pose_table, write_pose_table
     from gaitcore.pipeline import animate
 
-    if args.bvh is not None and args.skeleton is None:
-        raise GaitInputError("--bvh needs --skeleton SKEL.json to know the joint hierarchy")
+    exports = [(flag, path) for flag, path in (("bvh", args.bvh), ("glb", args.glb))
+               if path is not None]
+    if exports and args.skeleton is None:
+        raise GaitInputError(f"--{exports[0][0]} needs --skeleton SKEL.json (or a .bvh file) "
+                             "to know the joint hierarchy")
+    if not (np.isfinite(args.fps) and args.fps > 0):
+        raise GaitInputError(f"--fps must be a positive number of frames per second, got {args.fps}")
+    skeleton = None
+    if args.skeleton is not None:
+        from gaitcore.io.bvh_reader import read_bvh
+        from gaitcore.skeleton import Skeleton
+
+        if args.skeleton.suffix.lower() == ".bvh":
+            skeleton = read_bvh(args.skeleton)[0]
+        else:
+            skeleton = Skeleton.from_json(args.skeleton)
     record = read_analysis_json(args.analysis)
     table = read_pose_table(args.key_poses)
+    if exports:
+        pose_matrix(skeleton, table)  # every channel of the skeleton posed, before any work
     poses = table.as_dict()
     alternates = None if args.no_switching else record.alternate_frames
     posed = set(record.key_frames) | set(alternates or ())
@@ -164,13 +189,12 @@ def _run_animate(args: argparse.Namespace) -> int:
         clamp=args.clamp,
     )
     out_table = PoseTable(np.arange(record.n_frames), table.columns, curves)
-    write_pose_table(args.out, out_table)
-    if args.bvh is not None:
-        from gaitcore.io.bvh import write_bvh
-        from gaitcore.skeleton import Skeleton
-
-        write_bvh(args.bvh, Skeleton.from_json(args.skeleton), out_table)
+    write_pose_table(args.out, out_table, fps=args.fps if args.csv_time else None)
     print(f"wrote {args.out} ({record.n_frames} frames, {len(table.columns)} channels)")
+    for flag, path in exports:  # the flag, not the file's suffix, names the format
+        EXPORTERS[f".{flag}"].write(path, skeleton, out_table, args.fps)
+        print(f"wrote {path} ({skeleton.n_joints} joints, {record.n_frames} frames "
+              f"at {args.fps:g} fps)")
     return 0
 
 

@@ -1,9 +1,11 @@
-"""BVH export of animation curves on a skeleton (Biovision hierarchy, read by Blender, Maya...).
+"""BVH (Biovision hierarchy) export of animation curves on a skeleton.
 
 The hierarchy follows the skeleton's joints; rotation channels are written in the skeleton's
-order, Zrotation Xrotation Yrotation (R = Rz Rx Ry, as in :mod:`gaitcore.skeleton`). The root
-has OFFSET 0 0 0 and absolute position channels, the convention most importers expect.
-Lengths are in the skeleton's units (metres), angles in degrees.
+order, Zrotation Xrotation Yrotation (R = Rz Rx Ry, as in :mod:`gaitcore.skeleton`). The
+root's OFFSET is its rest position and its position channels are absolute, as Blender's
+importer reads them (it subtracts the rest head), so a file read back by
+:func:`gaitcore.io.bvh_reader.read_bvh` gives the same rest skeleton. Lengths are in the
+skeleton's units (metres), angles in degrees.
 """
 
 from __future__ import annotations
@@ -66,10 +68,9 @@ def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: fl
             lines.append(f"{pad}}}")
             return
         head = "ROOT" if j.parent is None else "JOINT"
-        offset = (0.0, 0.0, 0.0) if j.parent is None else j.offset
         lines.append(f"{pad}{head} {j.name}")
         lines.append(f"{pad}{{")
-        lines.append(f"{pad}  OFFSET {_fmt(offset)}")
+        lines.append(f"{pad}  OFFSET {_fmt(j.offset)}")
         channels = j.channels or ("rz", "rx", "ry")
         lines.append(f"{pad}  CHANNELS {len(channels)} " + " ".join(_BVH_CHANNEL[c] for c in channels))
         for c in channels:
@@ -95,3 +96,6 @@ def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: fl
 
 def _fmt(v) -> str:
     return " ".join(f"{float(x):.6f}" for x in v)
+
+
+# ====================================================================== reading

@@ -1,0 +1,282 @@
+"""Export of animation curves, picked by file suffix, and a side-by-side preview video.
+
+``EXPORTERS`` maps a suffix to an :class:`Exporter`: ``.csv`` (curves with ``frame,time_s``
+then one column per channel), ``.bvh`` (Biovision hierarchy) and ``.glb`` (binary glTF with a
+skinned mesh). :func:`export_animation` picks one from the path. :func:`write_preview_video`
+writes the footage beside a render of the predicted skeleton, to judge the result at a glance.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from gaitcore.errors import GaitInputError
+from gaitcore.io.pose_table import PoseTable, write_pose_table
+from gaitcore.skeleton import Skeleton
+
+Progress = Callable[[int, int], bool]
+MAX_LISTED = 12
+"""Missing channels named in an error message before '... and N more'."""
+
+
+@dataclass(frozen=True)
+class Exporter:
+    """One file type the animation can be exported to.
+
+    Attributes
+    ----------
+    suffix : str
+        Lower-case file suffix with its dot.
+    description : str
+        For file dialogs ("BVH motion (*.bvh)").
+    needs_skeleton : bool
+    write : callable (path, skeleton or None, table, fps) -> None
+    """
+
+    suffix: str
+    description: str
+    needs_skeleton: bool
+    write: Callable[[Path, Skeleton | None, PoseTable, float], None]
+
+
+def _write_csv(path: Path, skeleton: Skeleton | None, table: PoseTable, fps: float) -> None:
+    write_pose_table(path, table, fps=fps)
+
+
+def _write_bvh(path: Path, skeleton: Skeleton | None, table: PoseTable, fps: float) -> None:
+    from gaitcore.io.bvh import write_bvh
+
+    pose_matrix(skeleton, table)  # the full list of missing channels, if any
+    write_bvh(path, skeleton, table, fps=fps)
+
+
+def _write_glb(path: Path, skeleton: Skeleton | None, table: PoseTable, fps: float) -> None:
+    from gaitcore.io.gltf import write_glb
+
+    write_glb(path, skeleton, pose_matrix(skeleton, table), fps)
+
+
+EXPORTERS: dict[str, Exporter] = {
+    e.suffix: e for e in (
+        Exporter(".csv", "Joint-angle curves (*.csv)", False, _write_csv),
+        Exporter(".bvh", "BVH motion (*.bvh)", True, _write_bvh),
+        Exporter(".glb", "glTF binary, skinned (*.glb)", True, _write_glb),
+    )
+}
+
+
+def export_animation(path: str | Path, skeleton: Skeleton | None, table: PoseTable,
+                     fps: float = 24.0) -> Path:
+    """Write animation curves in the format named by the suffix of ``path``.
+
+    Parameters
+    ----------
+    path : str or Path
+        Output file; its suffix (case-insensitive) picks the exporter from ``EXPORTERS``.
+    skeleton : Skeleton or None
+        Needed by ``.bvh`` and ``.glb``.
+    table : PoseTable
+        One row per frame; columns named like ``skeleton.channel_names`` (extra columns are
+        ignored by the skeletal formats).
+    fps : float
+        Frame rate: ``time_s = frame / fps`` in CSV, BVH frame time and glTF key times.
+
+    Returns
+    -------
+    Path
+        The file written.
+
+    Raises
+    ------
+    GaitInputError
+        Unknown suffix (the message lists the known ones), no skeleton for a skeletal format,
+        channels of the skeleton missing from the table (all listed), or a bad frame rate.
+    """
+    path = Path(path)
+    exporter = EXPORTERS.get(path.suffix.lower())
+    if exporter is None:
+        known = ", ".join(f"{s} ({e.description.split(' (')[0]})" for s, e in EXPORTERS.items())
+        raise GaitInputError(f"cannot export to {path.name!r}: unknown file type "
+                             f"{path.suffix or '(none)'!r}; use one of {known}")
+    if exporter.needs_skeleton and skeleton is None:
+        raise GaitInputError(f"{exporter.suffix} export needs a skeleton (its joint hierarchy); "
+                             "give one (a skeleton .json or .bvh file)")
+    if not (np.isfinite(fps) and fps > 0):
+        raise GaitInputError(f"frame rate must be a positive number, got {fps}")
+    exporter.write(path, skeleton, table, float(fps))
+    return path
+
+
+def pose_matrix(skeleton: Skeleton, table: PoseTable) -> np.ndarray:
+    """The table's values re-ordered as ``skeleton.channel_names``, shape (n, k).
+
+    Raises
+    ------
+    GaitInputError
+        Some channels of the skeleton are not columns of the table; the message lists them.
+    """
+    index = {c: i for i, c in enumerate(table.columns)}
+    missing = [c for c in skeleton.channel_names if c not in index]
+    if missing:
+        listed = ", ".join(missing[:MAX_LISTED])
+        more = f" and {len(missing) - MAX_LISTED} more" if len(missing) > MAX_LISTED else ""
+        raise GaitInputError(
+            f"the curves lack {len(missing)} of the {skeleton.n_channels} channels of skeleton "
+            f"{skeleton.name!r}: {listed}{more}; give the key poses a column for every channel "
+            "of the skeleton")
+    return np.asarray(table.values, float)[:, [index[c] for c in skeleton.channel_names]]
+
+
+# ---------------------------------------------------------------- preview video
+VIDEO_CODECS = (("mp4v", None), ("MJPG", ".avi"))
+"""FourCC codes tried in turn, with the suffix forced on the file (None keeps the asked one)."""
+PANEL_BACKGROUND = (40, 40, 40)
+
+
+@dataclass(frozen=True)
+class PreviewVideo:
+    """What :func:`write_preview_video` wrote.
+
+    Attributes
+    ----------
+    path : Path
+        The file, which differs from the one asked for when a fallback codec was used.
+    codec : str
+        FourCC of the codec used.
+    frames : int
+    note : str or None
+        Why the file or codec differs from the request, to show the user; None otherwise.
+    """
+
+    path: Path
+    codec: str
+    frames: int
+    note: str | None = None
+
+
+def write_preview_video(path: str | Path, footage_frames: Iterable[np.ndarray],
+                        skeleton: Skeleton, poses: np.ndarray, fps: float = 24.0, *,
+                        size: tuple[int, int] = (320, 240), view_height_m: float | None = None,
+                        progress: Progress | None = None) -> PreviewVideo:
+    """Write the footage (left) beside a side render of the predicted skeleton (right).
+
+    Parameters
+    ----------
+    path : str or Path
+        Output video, normally ``.mp4`` (codec mp4v). When this OpenCV cannot encode mp4v,
+        an MJPG ``.avi`` is written next to it instead and ``note`` says so.
+    footage_frames : iterable of ndarray
+        Frames in clip order: BGR uint8 (H, W, 3), or grey / binary masks (H, W). Each is
+        fitted into its panel keeping its aspect ratio. At least ``len(poses)`` are needed;
+        frames past that are not read.
+    skeleton : Skeleton
+        Must have bones to draw (see :meth:`Skeleton.bone_ellipsoids`).
+    poses : ndarray of shape (n, k)
+        Predicted pose per frame, laid out as ``skeleton.channel_names``.
+    fps : float
+    size : (int, int)
+        Width and height of each panel in pixels; the video is twice as wide.
+    view_height_m : float, optional
+        World height seen by the skeleton camera; by default 1.4 times the skeleton's rest
+        height.
+    progress : callable (done, total) -> bool, optional
+        Called before each frame and at the end; returning False cancels.
+
+    Returns
+    -------
+    PreviewVideo
+
+    Raises
+    ------
+    GaitInputError
+        Bad poses, size or frame rate, fewer footage frames than poses, or no usable codec.
+    InterruptedError
+        ``progress`` returned False; the partial file is removed.
+    """
+    import cv2
+
+    from gaitcore.synth.render import SkeletonRenderer
+
+    p = np.asarray(poses, dtype=float)
+    if p.ndim != 2 or p.shape[0] == 0:
+        raise GaitInputError(f"poses must have shape (frames, channels), got {p.shape}")
+    if not (np.isfinite(fps) and fps > 0):
+        raise GaitInputError(f"frame rate must be a positive number, got {fps}")
+    width, height = (int(v) for v in size)
+    world = skeleton.forward_kinematics(p)
+    if view_height_m is None:
+        rest = skeleton.joint_positions(skeleton.rest_pose())
+        view_height_m = 1.4 * float(np.ptp(rest[:, 1])) or 2.9
+    with SkeletonRenderer(skeleton, width=width, height=height,
+                          view_height_m=view_height_m) as renderer:
+        writer, used, note = _open_writer(Path(path), fps, (2 * width, height))
+        done = 0
+        try:
+            frames = iter(footage_frames)
+            for done in range(len(p)):
+                if progress is not None and progress(done, len(p)) is False:
+                    raise InterruptedError(f"preview video cancelled at frame {done} of {len(p)}")
+                image = next(frames, None)
+                if image is None:
+                    raise GaitInputError(f"the footage has {done} frames but there are {len(p)} "
+                                         "poses; give the clip the animation was made from")
+                rgb, _ = renderer.render_world(world[done])
+                panel = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
+                cv2.putText(panel, f"frame {done}", (6, height - 8), cv2.FONT_HERSHEY_SIMPLEX,
+                            0.4, (30, 30, 30), 1, cv2.LINE_AA)
+                writer.write(np.hstack([_fit(image, width, height), panel]))
+        except BaseException:
+            writer.release()
+            used[0].unlink(missing_ok=True)
+            raise
+        writer.release()
+    if progress is not None:
+        progress(len(p), len(p))
+    return PreviewVideo(used[0], used[1], len(p), note)
+
+
+def _open_writer(path: Path, fps: float, frame_size: tuple[int, int]):
+    """The first codec of ``VIDEO_CODECS`` that opens: (writer, (path, fourcc), note)."""
+    import cv2
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tried = []
+    for fourcc, suffix in VIDEO_CODECS:
+        target = path if suffix is None else path.with_suffix(suffix)
+        writer = cv2.VideoWriter(str(target), cv2.VideoWriter_fourcc(*fourcc), fps, frame_size)
+        if writer.isOpened():
+            note = None
+            if tried:
+                note = (f"codec {tried[0]} is not available in this OpenCV build; wrote "
+                        f"{fourcc} video to {target.name} instead of {path.name}")
+            return writer, (target, fourcc), note
+        writer.release()
+        target.unlink(missing_ok=True)
+        tried.append(fourcc)
+    raise GaitInputError(f"cannot write video {path}: none of the codecs {', '.join(tried)} is "
+                         "available in this OpenCV build; install opencv-python with FFmpeg")
+
+
+def _fit(image: np.ndarray, width: int, height: int) -> np.ndarray:
+    """``image`` scaled into a (height, width, 3) BGR panel, aspect kept, centred."""
+    import cv2
+
+    img = np.asarray(image)
+    if img.dtype == bool:
+        img = img.astype(np.uint8) * 255
+    if img.ndim == 2:
+        img = cv2.cvtColor(img.astype(np.uint8), cv2.COLOR_GRAY2BGR)
+    if img.ndim != 3 or img.shape[2] != 3 or img.dtype != np.uint8:
+        raise GaitInputError(f"footage frames must be uint8 images (H, W, 3) or (H, W), got "
+                             f"{img.dtype} {img.shape}")
+    scale = min(width / img.shape[1], height / img.shape[0])
+    w, h = max(1, round(img.shape[1] * scale)), max(1, round(img.shape[0] * scale))
+    panel = np.empty((height, width, 3), np.uint8)
+    panel[:] = PANEL_BACKGROUND
+    x, y = (width - w) // 2, (height - h) // 2
+    panel[y:y + h, x:x + w] = cv2.resize(img, (w, h), interpolation=cv2.INTER_AREA)
+    return panel
