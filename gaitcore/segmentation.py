@@ -75,7 +75,7 @@ class SegmentationSettings:
     method: str = "grabcut"
     n_components: int = 5
     lut_bits: int = 5
-    work_side_px: int = 256
+    work_side_px: int = 192
     band_frac: float = 0.06
     grabcut_iters: int = 1
     reach_frac: float = 0.2
@@ -157,7 +157,7 @@ class _Segmenter:
 
     def _grabcut(self, frame: np.ndarray) -> Found | None:
         """Graph cut in a band around the predicted silhouette, at the working size."""
-        small = cv2.resize(frame, self.work_wh, interpolation=cv2.INTER_AREA)
+        small = _shrink(frame, self.work_wh)
         pred = self._predict() if self.prev is not None else self._detect(small)
         if pred is None:
             return None
@@ -425,3 +425,12 @@ def segment_clip(
     if seg is None:
         raise GaitInputError("the clip has no frames: choose another file or frame range")
     return acc.finish(margin=margin, max_side=max_side)
+
+
+def _shrink(image: np.ndarray, size_wh: tuple[int, int]) -> np.ndarray:
+    """Area-averaged downscale, halving with ``cv2.pyrDown`` first while the image is more
+    than twice the target: as smooth as INTER_AREA on the whole frame at a quarter of its
+    cost, which is most of the time of a frame at 854x480."""
+    while image.shape[1] >= 2 * size_wh[0] and image.shape[0] >= 2 * size_wh[1]:
+        image = cv2.pyrDown(image)
+    return cv2.resize(image, size_wh, interpolation=cv2.INTER_AREA)
