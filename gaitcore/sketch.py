@@ -241,7 +241,8 @@ def _dis_flow(a: np.ndarray, b: np.ndarray) -> np.ndarray:
             : a.shape[0], : a.shape[1]
         ]
     dis = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM)
-    return dis.calc(a, b, None)
+    # OpenCV refuses non-contiguous views such as the crops taken above.
+    return dis.calc(np.ascontiguousarray(a), np.ascontiguousarray(b), None)
 
 
 def _grey(img: np.ndarray, what: str) -> np.ndarray:

@@ -105,3 +105,13 @@ def test_propagate_strokes_bad_frames():
         propagate_strokes([Stroke([[1, 1]], 1, 0)], a, a[:-1])
     with pytest.raises(GaitInputError, match="8-bit"):
         propagate_strokes([Stroke([[1, 1]], 1, 0)], a.astype(np.float32), a)
+
+
+def test_propagate_strokes_on_a_crop_of_a_large_colour_frame():
+    # Regression: the flow runs on a window around the strokes, a non-contiguous view that
+    # OpenCV's DIS refused.
+    a = textured(300, 400)
+    shift = np.float32([[1, 0, 2], [0, 1, 1]])
+    b = cv2.warpAffine(a, shift, (a.shape[1], a.shape[0]), borderMode=cv2.BORDER_REFLECT)
+    [s] = propagate_strokes([Stroke([[200, 150], [220, 160]], 3, 0)], a, b)
+    np.testing.assert_allclose(s.points_xy - [[200, 150], [220, 160]], [[2, 1], [2, 1]], atol=0.5)
