@@ -6,7 +6,7 @@
   pyrender's lit shader, two directional lights), rendering the same poses.
 - Gait generation (inverse kinematics of the four legs) per frame.
 
-Run ``python -m benchmarks.bench_synth`` to print the tables (needs ``PYOPENGL_PLATFORM=egl``
+Run ``python -m benchmarks synth`` to print the tables (needs ``PYOPENGL_PLATFORM=egl``
 on a machine without a display; it is set here when missing).
 """
 

@@ -1,5 +1,5 @@
 #!/bin/sh
-# The headless demo: render a synthetic horse canter, analyse its silhouettes, pose the
+# The demo: render a synthetic horse canter, analyse its silhouettes, pose the
 # chosen key-images with the true poses, animate, and report how close the result is.
 set -eu
 bin=$1
@@ -11,4 +11,12 @@ export PYOPENGL_PLATFORM="${PYOPENGL_PLATFORM:-egl}"
 "$bin/gaitcore" animate "$out/analysis/analysis.json" --key-poses "$out/keys.csv" \
     --out "$out/curves.csv" --bvh "$out/canter.bvh" --skeleton "$out/clip/skeleton.json"
 "$bin/python" scripts/demo_pose_keys.py --compare "$out/curves.csv" "$out/clip/poses.csv" "$out/clip/skeleton.json"
-echo "demo output in $out (curves.csv, canter.bvh, analysis/analysis.json, clip/images)"
+echo "headless run written to $out (curves.csv, canter.bvh, analysis/analysis.json, clip/images)"
+# Then the application on the same kind of clip: a window when there is a display, else a
+# screenshot of the loaded main window.
+if [ -n "${DISPLAY:-}" ] || [ -n "${WAYLAND_DISPLAY:-}" ]; then
+    "$bin/gaitstudio" --demo
+else
+    QT_QPA_PLATFORM=offscreen "$bin/gaitstudio" --demo --screenshot "$out/gaitstudio.png"
+    echo "no display: saved the Gait Studio window to $out/gaitstudio.png"
+fi

@@ -1,0 +1,124 @@
+"""Keep the analysis in step with the project, off the GUI thread, latest request wins.
+
+Every gaitcore call of the analysis step is here. A change of the silhouettes (or of the
+working size) reruns the whole analysis (PCA, diagnosis, keys); a change of the number of
+PCs or keys, of pinned or dropped keys or of switching only reruns the key search on the
+projections already computed. Requests are coalesced for 80 ms (spin boxes) and a newer one
+cancels the running one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from PySide6.QtCore import QObject, QTimer
+
+from app.state import AppState
+from app.workers import Job, JobRunner, Progress
+from gaitcore.errors import GaitInputError
+from gaitcore.keyimages import select_key_images
+from gaitcore.pipeline import Analysis, AnalysisSettings, analyze_silhouettes
+from gaitcore.project import Project, Silhouettes
+from gaitcore.switching import propose_alternates
+
+_COALESCE_MS = 80
+
+
+def analyze(silhouettes: Silhouettes, settings: AnalysisSettings, progress: Progress) -> Analysis:
+    """The whole analysis step of the paper (Sections 2.3, 3.1, 3.2, 5.2) on silhouettes."""
+    return analyze_silhouettes(silhouettes.roi, settings, sketched=silhouettes.origin == "sketched",
+                               progress=progress)
+
+
+def reselect(analysis: Analysis, settings: AnalysisSettings, progress: Progress) -> Analysis:
+    """``analysis`` with the key-images (and alternates) chosen again under ``settings``.
+
+    Raises
+    ------
+    GaitInputError
+        More PCs than the analysis has, or a key search that cannot be satisfied.
+    """
+    available = analysis.projections.shape[1]
+    if settings.pcs > available:
+        raise GaitInputError(f"the clip has only {available} components: use at most {available} PCs")
+    coords = analysis.projections[:, : settings.pcs]
+    selection = select_key_images(
+        coords, settings.keys, alpha=settings.alpha, pinned=settings.pinned,
+        forbidden=tuple(sorted(set(settings.forbidden) | set(analysis.lost_frames))),
+        progress=progress, time_limit_s=settings.key_time_limit_s,
+    )
+    alternates = None
+    if settings.switching:
+        alternates = propose_alternates(coords, selection.frames, theta=analysis.loop_angle)
+    return replace(analysis, settings=settings, selection=selection, alternate_frames=alternates)
+
+
+class AnalysisController(QObject):
+    """Recompute ``state.analysis`` whenever the silhouettes or the settings change."""
+
+    def __init__(self, state: AppState, runner: JobRunner, parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self._state = state
+        self._runner = runner
+        self._job: Job | None = None
+        self._asked: tuple[Silhouettes | None, AnalysisSettings] | None = None
+        self._analysed: Silhouettes | None = None  # silhouettes of state.analysis
+        self._timer = QTimer(self, singleShot=True, interval=_COALESCE_MS)
+        self._timer.timeout.connect(self._start)
+        state.projectChanged.connect(self._on_project)
+        state.projectOpened.connect(self._cancel)
+
+    @property
+    def running(self) -> bool:
+        """True while a computation is pending or running."""
+        return self._timer.isActive() or self._job is not None
+
+    def _on_project(self, project: Project) -> None:
+        wanted = (project.silhouettes, project.settings)
+        if self._asked is not None and wanted[0] is self._asked[0] and wanted[1] == self._asked[1]:
+            return
+        self._asked = wanted
+        if project.silhouettes is None:
+            self._cancel()
+            if self._state.analysis is not None:
+                self._state.set_analysis(None)
+            return
+        self._timer.start()
+
+    def _cancel(self, *_opened) -> None:
+        self._timer.stop()
+        if self._job is not None:
+            self._job.cancel()
+            self._job = None
+        self._asked = None
+
+    def _start(self) -> None:
+        if self._job is not None:
+            self._job.cancel()
+        silhouettes, settings = self._asked
+        current = self._state.analysis
+        if current is not None and self._analysed is silhouettes and (
+                current.settings.max_side_px == settings.max_side_px):
+            job = Job(lambda progress: reselect(current, settings, progress), "Choosing key-images")
+        else:
+            job = Job(lambda progress: analyze(silhouettes, settings, progress), "Analysing the clip")
+        job.succeeded.connect(lambda result, j=job, s=silhouettes: self._done(j, s, result))
+        job.failed.connect(lambda message, j=job: self._failed(j, message))
+        job.cancelled.connect(lambda j=job: self._finished(j))
+        self._job = job
+        self._runner.start(job)
+
+    def _done(self, job: Job, silhouettes: Silhouettes, analysis: Analysis) -> None:
+        if job is self._job:
+            self._job = None
+            self._analysed = silhouettes
+            self._state.set_analysis(analysis)
+
+    def _failed(self, job: Job, message: str) -> None:
+        if job is self._job:
+            self._job = None
+            self._state.analysisFailed.emit(message)
+
+    def _finished(self, job: Job) -> None:
+        if job is self._job:
+            self._job = None

@@ -1,0 +1,142 @@
+"""Autosave to a recovery folder, and offer the copy after a crash.
+
+While the project has unsaved changes, it is saved every ``interval_ms`` to
+``<recovery dir>/<session>.gaitproj`` (plus ``<session>.json`` naming the real project file).
+A lock file marks the session as alive; at start-up, copies whose lock is stale (their
+process is gone) are offered for recovery. A clean save or a normal exit deletes the copy.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from PySide6.QtCore import QLockFile, QObject, QTimer
+
+from app.state import AppState
+from gaitcore.errors import GaitInputError
+from gaitcore.io.project_file import SUFFIX, load_project, save_project, sidecar_dir
+from gaitcore.project import Project
+
+DEFAULT_INTERVAL_MS = 60_000
+
+
+@dataclass(frozen=True)
+class RecoveryCopy:
+    """An autosaved project left by a session that did not exit normally.
+
+    Attributes
+    ----------
+    project_file : Path
+        The autosaved project (in the recovery folder).
+    original : Path or None
+        The project file the work belongs to (None: never saved).
+    saved_at : float
+        Seconds since the epoch.
+    """
+
+    project_file: Path
+    original: Path | None
+    saved_at: float
+
+    def describe(self) -> str:
+        name = self.original.name if self.original else "an unsaved project"
+        return f"{name} from {time.strftime('%Y-%m-%d %H:%M', time.localtime(self.saved_at))}"
+
+    def load(self) -> Project:
+        """Read the copy (GaitInputError when it is damaged)."""
+        return load_project(self.project_file)
+
+    def discard(self) -> None:
+        """Delete the copy and its files."""
+        _remove(self.project_file)
+
+
+def find_recovery_copies(directory: Path) -> list[RecoveryCopy]:
+    """Copies in ``directory`` whose session is gone, newest first."""
+    if not directory.is_dir():
+        return []
+    found = []
+    for meta in directory.glob("*.json"):
+        lock = QLockFile(str(meta.with_suffix(".lock")))
+        if not lock.tryLock(0):
+            continue  # another running Gait Studio owns it
+        lock.unlock()
+        try:
+            info = json.loads(meta.read_text(encoding="utf-8"))
+            original = Path(info["original"]) if info.get("original") else None
+            found.append(RecoveryCopy(meta.with_suffix(SUFFIX), original, float(info["saved_at"])))
+        except (OSError, ValueError, KeyError, TypeError):
+            _remove(meta.with_suffix(SUFFIX))
+    return sorted(found, key=lambda c: -c.saved_at)
+
+
+class Autosaver(QObject):
+    """Save the project to the recovery folder while it has unsaved changes.
+
+    Parameters
+    ----------
+    state : AppState
+    directory : Path
+        The recovery folder (created when needed).
+    interval_ms : int
+        Time between autosaves.
+    """
+
+    def __init__(self, state: AppState, directory: Path, interval_ms: int = DEFAULT_INTERVAL_MS,
+                 parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self._state = state
+        self.directory = Path(directory)
+        stem = f"session-{os.getpid()}-{int(time.time() * 1000)}"
+        self.project_file = self.directory / (stem + SUFFIX)
+        self._lock: QLockFile | None = None
+        self._saved: Project | None = None
+        self.last_error = ""
+        self._timer = QTimer(self, interval=interval_ms)
+        self._timer.timeout.connect(self.save_now)
+        self._timer.start()
+        state.undo_stack.cleanChanged.connect(self._on_clean)
+
+    def save_now(self) -> bool:
+        """Autosave if there are unsaved changes not yet autosaved; True when it wrote."""
+        state = self._state
+        if state.undo_stack.isClean() or state.project is self._saved:
+            return False
+        try:
+            if self._lock is None:
+                self.directory.mkdir(parents=True, exist_ok=True)
+                self._lock = QLockFile(str(self.project_file.with_suffix(".lock")))
+                self._lock.setStaleLockTime(0)
+                self._lock.tryLock(0)
+            save_project(state.project, self.project_file)
+            meta = {"original": str(state.path) if state.path else None, "saved_at": time.time()}
+            self.project_file.with_suffix(".json").write_text(json.dumps(meta), encoding="utf-8")
+        except (GaitInputError, OSError) as exc:
+            self.last_error = str(exc)
+            return False
+        self._saved = state.project
+        return True
+
+    def discard(self) -> None:
+        """Delete this session's copy (after a save, or at a normal exit)."""
+        self._saved = None
+        _remove(self.project_file)
+        if self._lock is not None:
+            self._lock.unlock()
+            self._lock = None
+            Path(self.project_file.with_suffix(".lock")).unlink(missing_ok=True)
+
+    def _on_clean(self, clean: bool) -> None:
+        if clean:
+            self.discard()
+
+
+def _remove(project_file: Path) -> None:
+    for f in (project_file, project_file.with_suffix(".json")):
+        f.unlink(missing_ok=True)
+    shutil.rmtree(sidecar_dir(project_file), ignore_errors=True)

@@ -1,0 +1,144 @@
+"""Undoable edits of the project: one QUndoCommand per action of the artist.
+
+A project is an immutable value, so every command computes the new value when it is made and
+only swaps before and after on redo and undo. Commands that concern one frame go back to that
+frame when they are undone or redone, so the artist sees what changed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from PySide6.QtGui import QUndoCommand
+
+from app.state import AppState
+from gaitcore.model import Rect, Stroke
+from gaitcore.pipeline import AnalysisSettings
+from gaitcore.project import Project, Silhouettes
+
+_SETTINGS_ID = 1001
+
+
+class ProjectCommand(QUndoCommand):
+    """Replace the project by ``after``; undo puts back the project it replaced.
+
+    Parameters
+    ----------
+    state : AppState
+    after : Project
+        The project after the edit.
+    text : str
+        What the Edit menu shows ("Undo <text>").
+    frame : int, optional
+        Frame to show on redo and undo.
+    """
+
+    def __init__(self, state: AppState, after: Project, text: str, frame: int | None = None) -> None:
+        super().__init__(text)
+        self._state = state
+        self._before = state.project
+        self._after = after
+        self._frame = frame
+
+    def redo(self) -> None:
+        self._state.set_project(self._after)
+        self._show_frame()
+
+    def undo(self) -> None:
+        self._state.set_project(self._before)
+        self._show_frame()
+
+    def _show_frame(self) -> None:
+        if self._frame is not None:
+            self._state.set_frame(self._frame)
+
+
+class AddRectCommand(ProjectCommand):
+    """Add a subject or background rectangle (drawn on the first frame)."""
+
+    def __init__(self, state: AppState, rect: Rect, *, subject: bool) -> None:
+        kind = "subject" if subject else "background"
+        super().__init__(state, state.project.with_rect(rect, subject=subject),
+                         f"add {kind} rectangle", frame=0)
+
+
+class RemoveRectCommand(ProjectCommand):
+    """Remove a subject or background rectangle."""
+
+    def __init__(self, state: AppState, rect: Rect) -> None:
+        super().__init__(state, state.project.without_rect(rect), "remove rectangle", frame=0)
+
+
+class AddStrokesCommand(ProjectCommand):
+    """Add strokes: one drawn stroke, or strokes copied or propagated to a frame."""
+
+    def __init__(self, state: AppState, strokes: list[Stroke], text: str = "draw stroke") -> None:
+        frame = strokes[0].frame if strokes else None
+        super().__init__(state, state.project.with_strokes(tuple(strokes)), text, frame=frame)
+
+
+class EraseStrokesCommand(ProjectCommand):
+    """Remove the strokes at positions ``indices`` of ``project.strokes``."""
+
+    def __init__(self, state: AppState, indices: set[int]) -> None:
+        strokes = state.project.strokes
+        frame = strokes[min(indices)].frame if indices else None
+        text = "erase stroke" if len(indices) == 1 else f"erase {len(indices)} strokes"
+        super().__init__(state, state.project.without_strokes(indices), text, frame=frame)
+
+
+class PinKeyCommand(ProjectCommand):
+    """Force a frame into the key set (or release it)."""
+
+    def __init__(self, state: AppState, frame: int, pinned: bool = True) -> None:
+        after = state.project.with_key_constraint(frame, pinned=pinned, forbidden=None)
+        super().__init__(state, after, f"{'pin' if pinned else 'unpin'} frame {frame}", frame=frame)
+
+
+class ForbidKeyCommand(ProjectCommand):
+    """Keep a frame out of the key set, e.g. drop a key the artist dislikes (or allow it)."""
+
+    def __init__(self, state: AppState, frame: int, forbidden: bool = True) -> None:
+        after = state.project.with_key_constraint(frame, pinned=None, forbidden=forbidden)
+        text = f"{'drop' if forbidden else 'allow'} key frame {frame}"
+        super().__init__(state, after, text, frame=frame)
+
+
+class ClearKeyConstraintsCommand(ProjectCommand):
+    """Unpin and allow every frame."""
+
+    def __init__(self, state: AppState) -> None:
+        settings = replace(state.project.settings, pinned=(), forbidden=())
+        super().__init__(state, replace(state.project, settings=settings), "clear pinned and dropped keys")
+
+
+class ChangeSettingsCommand(ProjectCommand):
+    """Change the analysis settings; consecutive changes of one field merge into one step."""
+
+    def __init__(self, state: AppState, settings: AnalysisSettings, field_name: str) -> None:
+        super().__init__(state, replace(state.project, settings=settings), f"change {field_name}")
+        self._field = field_name
+
+    def id(self) -> int:
+        return _SETTINGS_ID
+
+    def mergeWith(self, other: QUndoCommand) -> bool:
+        if not isinstance(other, ChangeSettingsCommand) or other._field != self._field:
+            return False
+        self._after = other._after
+        return True
+
+
+class AcceptAlternatesCommand(ProjectCommand):
+    """Accept alternate frames for the switching models (paper Section 3.2)."""
+
+    def __init__(self, state: AppState, frames: tuple[int, ...]) -> None:
+        super().__init__(state, replace(state.project, alternates=tuple(frames)),
+                         "accept alternates" if frames else "clear alternates")
+
+
+class SetSilhouettesCommand(ProjectCommand):
+    """Replace the silhouettes, e.g. with the result of segmenting the clip."""
+
+    def __init__(self, state: AppState, silhouettes: Silhouettes | None, text: str) -> None:
+        super().__init__(state, replace(state.project, silhouettes=silhouettes), text)

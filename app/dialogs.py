@@ -1,0 +1,118 @@
+"""Every question the application asks the artist, in one replaceable object.
+
+Controllers call an :class:`Asker` instead of building message boxes themselves, so asking
+is separate from doing (as SLEAP's command layer does) and tests substitute a scripted asker.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from PySide6.QtWidgets import QFileDialog, QMessageBox, QWidget
+
+from gaitcore.io.project_file import SUFFIX
+
+FOOTAGE_FILTER = "Footage (*.mp4 *.mov *.avi *.mkv *.m4v *.webm *.gif);;All files (*)"
+PROJECT_FILTER = f"Gait Studio projects (*{SUFFIX})"
+
+
+class Asker:
+    """Modal dialogs parented to ``parent`` (the main window)."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        self._parent = parent
+
+    def error(self, title: str, message: str) -> None:
+        """Tell the artist something failed; ``message`` is a one-line gaitcore message."""
+        QMessageBox.warning(self._parent, title, message)
+
+    def save_changes(self, name: str) -> str:
+        """Ask what to do with unsaved changes: ``"save"``, ``"discard"`` or ``"cancel"``."""
+        buttons = (QMessageBox.StandardButton.Save | QMessageBox.StandardButton.Discard
+                   | QMessageBox.StandardButton.Cancel)
+        answer = QMessageBox.question(self._parent, "Unsaved changes",
+                                      f"Save the changes to {name}?", buttons,
+                                      QMessageBox.StandardButton.Save)
+        return {QMessageBox.StandardButton.Save: "save",
+                QMessageBox.StandardButton.Discard: "discard"}.get(answer, "cancel")
+
+    def open_path(self, start: Path | None) -> Path | None:
+        """A project, video file or image folder to open (None: cancelled)."""
+        path, _ = QFileDialog.getOpenFileName(
+            self._parent, "Open project or footage", str(start or ""),
+            f"{PROJECT_FILTER};;{FOOTAGE_FILTER}")
+        return Path(path) if path else None
+
+    def open_folder(self, start: Path | None) -> Path | None:
+        """A folder of frames or of binary masks (None: cancelled)."""
+        path = QFileDialog.getExistingDirectory(self._parent, "Open image or mask folder",
+                                                str(start or ""))
+        return Path(path) if path else None
+
+    def save_path(self, suggested: Path) -> Path | None:
+        """Where to save the project (None: cancelled); the suffix is added when missing."""
+        path, _ = QFileDialog.getSaveFileName(self._parent, "Save project", str(suggested),
+                                              PROJECT_FILTER)
+        if not path:
+            return None
+        p = Path(path)
+        return p if p.suffix == SUFFIX else p.with_name(p.name + SUFFIX)
+
+    def locate_footage(self, missing: Path) -> Path | None:
+        """The new place of footage that moved (None: open without footage)."""
+        QMessageBox.information(
+            self._parent, "Footage not found",
+            f"The clip of this project is no longer at\n{missing}\n\nShow where it is now "
+            "(or cancel to open the project without footage).")
+        if missing.suffix:
+            path, _ = QFileDialog.getOpenFileName(self._parent, f"Where is {missing.name}?",
+                                                  str(missing.parent), FOOTAGE_FILTER)
+        else:
+            path = QFileDialog.getExistingDirectory(self._parent, f"Where is {missing.name}?",
+                                                    str(missing.parent))
+        return Path(path) if path else None
+
+    def recover(self, description: str) -> bool:
+        """Offer to recover autosaved work; True to recover, False to discard it."""
+        answer = QMessageBox.question(
+            self._parent, "Recover unsaved work",
+            f"Gait Studio did not close normally. Recover the autosaved copy of {description}?\n"
+            "(No deletes the copy.)")
+        return answer == QMessageBox.StandardButton.Yes
+
+
+class HeadlessAsker(Asker):
+    """Answers without asking, for ``--screenshot`` runs: errors go to stderr and are kept.
+
+    Attributes
+    ----------
+    errors : list of str
+        Every error reported, as ``"title: message"``.
+    """
+
+    def __init__(self) -> None:
+        super().__init__(None)
+        self.errors: list[str] = []
+
+    def error(self, title: str, message: str) -> None:
+        self.errors.append(f"{title}: {message}")
+        print(f"gaitstudio: {title}: {message}", file=sys.stderr)
+
+    def save_changes(self, name: str) -> str:
+        return "discard"
+
+    def open_path(self, start: Path | None) -> Path | None:
+        return None
+
+    def open_folder(self, start: Path | None) -> Path | None:
+        return None
+
+    def save_path(self, suggested: Path) -> Path | None:
+        return None
+
+    def locate_footage(self, missing: Path) -> Path | None:
+        return None
+
+    def recover(self, description: str) -> bool:
+        return False

@@ -1,0 +1,231 @@
+"""The main window: the frame view in the middle, docks around it, menus and shortcuts.
+
+The window only assembles: state (:mod:`app.state`), file operations (:mod:`app.document`),
+analysis (:mod:`app.analysis_controller`), tools (:mod:`app.tools`), playback
+(:mod:`app.playback`) and the widgets. Window geometry and dock layout are remembered with
+QSettings.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from PySide6.QtCore import QSettings, QStandardPaths, Qt
+from PySide6.QtGui import QAction, QKeySequence
+from PySide6.QtWidgets import QDockWidget, QMainWindow, QMenu, QWidget
+
+from app.analysis_controller import AnalysisController
+from app.autosave import Autosaver, find_recovery_copies
+from app.dialogs import Asker
+from app.document import DocumentController
+from app.playback import Player
+from app.state import AppState
+from app.tools import ToolsController
+from app.widgets.diagnosis_panel import DiagnosisPanel
+from app.widgets.eigen_view import EigenImagesView
+from app.widgets.frame_view import FrameView
+from app.widgets.pc_plot import PCPlotWidget
+from app.widgets.timeline import TimelineWidget
+from app.workers import FrameLoader, JobRunner
+
+APP_NAME = "Gait Studio"
+
+
+def default_recovery_dir() -> Path:
+    """``<user app data>/recovery``: where autosaved copies go."""
+    data = QStandardPaths.writableLocation(QStandardPaths.StandardLocation.AppLocalDataLocation)
+    return Path(data) / "recovery"
+
+
+class MainWindow(QMainWindow):
+    """Gait Studio's window.
+
+    Parameters
+    ----------
+    asker : Asker, optional
+        Dialogs (tests pass a scripted one).
+    recovery_dir : Path, optional
+        Folder of autosaved copies (default :func:`default_recovery_dir`).
+    autosave_ms : int
+        Interval between autosaves.
+    remember_layout : bool
+        Restore the window geometry and dock layout of the last session, and save them at
+        close (off for screenshots and tests, which want the default layout).
+    """
+
+    def __init__(self, *, asker: Asker | None = None, recovery_dir: Path | None = None,
+                 autosave_ms: int = 60_000, remember_layout: bool = True) -> None:
+        super().__init__()
+        self._remember_layout = remember_layout
+        self.setObjectName("mainWindow")
+        self.state = AppState(self)
+        self.runner = JobRunner(self)
+        self.loader = FrameLoader(self)
+        self.asker = asker or Asker(self)
+        self.autosaver = Autosaver(self.state, recovery_dir or default_recovery_dir(), autosave_ms, self)
+        self.documents = DocumentController(self.state, self.asker, self.runner, self.autosaver, self)
+        self.analysis = AnalysisController(self.state, self.runner, self)
+        self.player = Player(self.state, self)
+
+        self.frame_view = FrameView(self.state, self.loader)
+        self.setCentralWidget(self.frame_view)
+        self.timeline = TimelineWidget(self.state)
+        self.pc_plot = PCPlotWidget(self.state)
+        self.diagnosis = DiagnosisPanel(self.state)
+        self.eigen = EigenImagesView(self.state)
+        self.docks = {
+            "timeline": self._dock("Timeline", self.timeline, Qt.DockWidgetArea.BottomDockWidgetArea),
+            "pcs": self._dock("PC1 × PC2 and key-images", self.pc_plot, Qt.DockWidgetArea.RightDockWidgetArea),
+            "diagnosis": self._dock("Diagnosis", self.diagnosis, Qt.DockWidgetArea.RightDockWidgetArea),
+            "eigen": self._dock("Eigen-images", self.eigen, Qt.DockWidgetArea.LeftDockWidgetArea),
+        }
+        self.tools = ToolsController(self.state, self.frame_view, self.documents, self)
+        self.addToolBar(self.tools.toolbar)
+        self._build_menus()
+
+        for source in (self.frame_view, self.pc_plot, self.documents):
+            source.messageRaised.connect(self._show_message)
+        self.state.analysisFailed.connect(self._show_message)
+        self.state.undo_stack.cleanChanged.connect(self._update_title)
+        self.state.pathChanged.connect(self._update_title)
+        self.state.sourceChanged.connect(self._update_title)
+        self.documents.recentChanged.connect(self._fill_recent)
+        self.resize(1500, 950)
+        self.resizeDocks([self.docks["eigen"], self.docks["pcs"]], [300, 520], Qt.Orientation.Horizontal)
+        if remember_layout:
+            self._restore_layout()
+        self._update_title()
+
+    def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea) -> QDockWidget:
+        dock = QDockWidget(title, self)
+        dock.setObjectName(title.split()[0].lower() + "Dock")
+        dock.setWidget(widget)
+        self.addDockWidget(area, dock)
+        return dock
+
+    # -- menus ---------------------------------------------------------------------------------
+    def _action(self, menu: QMenu, text: str, shortcut, slot) -> QAction:
+        action = menu.addAction(text)
+        if shortcut is not None:
+            action.setShortcut(QKeySequence(shortcut))
+        action.triggered.connect(lambda _checked=False: slot())
+        return action
+
+    def _build_menus(self) -> None:
+        bar = self.menuBar()
+        file = bar.addMenu("&File")
+        self._action(file, "&Open project or video...", QKeySequence.StandardKey.Open, self.open_dialog)
+        self._action(file, "Open image or &mask folder...", "Ctrl+Shift+O", self.open_folder_dialog)
+        self.recent_menu = file.addMenu("Open &recent")
+        self._fill_recent(self.documents.recent_files())
+        file.addSeparator()
+        self._action(file, "&Save", QKeySequence.StandardKey.Save, self.documents.save)
+        self._action(file, "Save &as...", QKeySequence.StandardKey.SaveAs, self.documents.save_as)
+        file.addSeparator()
+        self._action(file, "&Quit", QKeySequence.StandardKey.Quit, self.close)
+
+        edit = bar.addMenu("&Edit")
+        undo = self.state.undo_stack.createUndoAction(self, "&Undo")
+        undo.setShortcut(QKeySequence.StandardKey.Undo)
+        redo = self.state.undo_stack.createRedoAction(self, "&Redo")
+        redo.setShortcuts([QKeySequence.StandardKey.Redo, QKeySequence("Ctrl+Y")])
+        edit.addActions([undo, redo])
+
+        play = bar.addMenu("&Playback")
+        self.play_action = self._action(play, "Play / pause", Qt.Key.Key_Space, self.player.toggle)
+        self._action(play, "Next frame", Qt.Key.Key_Right, lambda: self.player.step(1))
+        self._action(play, "Previous frame", Qt.Key.Key_Left, lambda: self.player.step(-1))
+        self._action(play, "First frame", Qt.Key.Key_Home, lambda: self.player.go_to(0))
+        self._action(play, "Last frame", Qt.Key.Key_End, lambda: self.player.go_to(-1))
+
+        tools = bar.addMenu("&Tools")
+        tools.addActions(list(self.tools.tool_actions.values()))
+        tools.addSeparator()
+        tools.addActions([self.tools.segment_action, self.tools.copy_action,
+                          self.tools.propagate_action, self.tools.sketch_action])
+
+        view = bar.addMenu("&View")
+        for key, flag in (("silhouette", "Silhouette overlay"), ("onion", "Onion skin (previous strokes)")):
+            action = view.addAction(flag)
+            action.setCheckable(True)
+            action.setChecked(True)
+            action.toggled.connect(lambda on, k=key: self.frame_view.set_overlays(**{k: on}))
+        view.addSeparator()
+        for dock in self.docks.values():
+            view.addAction(dock.toggleViewAction())
+        view.addAction(self.tools.toolbar.toggleViewAction())
+
+    def _fill_recent(self, files: list[str]) -> None:
+        self.recent_menu.clear()
+        for f in files:
+            self.recent_menu.addAction(f).triggered.connect(lambda _c=False, p=f: self.open_path(Path(p)))
+        self.recent_menu.setEnabled(bool(files))
+
+    # -- file actions --------------------------------------------------------------------------
+    def open_path(self, path: Path) -> bool:
+        """Open a project or footage after saving or discarding unsaved changes."""
+        return self.documents.may_close() and self.documents.open_path(path)
+
+    def open_dialog(self) -> None:
+        path = self.asker.open_path(self.state.path.parent if self.state.path else None)
+        if path is not None:
+            self.open_path(path)
+
+    def open_folder_dialog(self) -> None:
+        path = self.asker.open_folder(None)
+        if path is not None:
+            self.open_path(path)
+
+    def offer_recovery(self) -> bool:
+        """Offer the newest autosaved copy left by a crash; True when one was recovered."""
+        copies = find_recovery_copies(self.autosaver.directory)
+        for copy in copies:
+            if self.asker.recover(copy.describe()):
+                return self.documents.recover(copy)
+            copy.discard()
+        return False
+
+    def is_ready(self) -> bool:
+        """True once the footage's current frame is shown and the analysis is up to date."""
+        state = self.state
+        frame_ok = state.source is None or self.frame_view.shown_frame == state.frame
+        silhouettes = state.project.silhouettes
+        analysis_ok = silhouettes is None or (state.analysis is not None and not self.analysis.running)
+        return frame_ok and analysis_ok and not self.runner.busy
+
+    # -- window --------------------------------------------------------------------------------
+    def _show_message(self, message: str) -> None:
+        self.statusBar().showMessage(message, 10_000)
+
+    def _update_title(self, *_changed) -> None:
+        state = self.state
+        if state.path is not None:
+            name = state.path.name
+        elif state.project.footage is not None:
+            name = f"{state.project.footage.name} (unsaved)"
+        else:
+            name = "untitled"
+        self.setWindowTitle(f"{name}[*] — {APP_NAME}")
+        self.setWindowModified(not state.undo_stack.isClean())
+
+    def _restore_layout(self) -> None:
+        settings = QSettings()
+        geometry, layout = settings.value("window/geometry"), settings.value("window/state")
+        if geometry is not None:
+            self.restoreGeometry(geometry)
+        if layout is not None:
+            self.restoreState(layout)
+
+    def closeEvent(self, event) -> None:  # noqa: N802 - Qt API
+        if not self.documents.may_close():
+            event.ignore()
+            return
+        if self._remember_layout:
+            settings = QSettings()
+            settings.setValue("window/geometry", self.saveGeometry())
+            settings.setValue("window/state", self.saveState())
+        self.player.stop()
+        self.runner.shutdown()
+        self.loader.stop()
+        self.autosaver.discard()
+        event.accept()

@@ -1,0 +1,154 @@
+"""Segmentation and sketch tools: the toolbar, and the gaitcore calls behind it.
+
+Every call into :mod:`gaitcore.segmentation` and :mod:`gaitcore.sketch` is in the four
+functions at the top, so an API change there is one edit here. Long work runs as a job with
+a progress dialog and Cancel; results land as undoable commands.
+"""
+
+from __future__ import annotations
+
+from PySide6.QtCore import QObject
+from PySide6.QtGui import QAction, QActionGroup, QKeySequence
+from PySide6.QtWidgets import QSpinBox, QToolBar
+
+from app.commands import AddStrokesCommand, SetSilhouettesCommand
+from app.document import DocumentController
+from app.state import AppState
+from app.widgets.frame_canvas import Tool
+from app.widgets.frame_view import FrameView
+from app.workers import Job, Progress
+from gaitcore.frames import FrameSource
+from gaitcore.model import Stroke
+from gaitcore.project import Project, Silhouettes
+from gaitcore.segmentation import segment_clip
+from gaitcore.sketch import carry_strokes, crop_sketches, propagate_strokes
+
+TOOL_KEYS = {Tool.NAVIGATE: "N", Tool.SUBJECT: "S", Tool.BACKGROUND: "B", Tool.DRAW: "D",
+             Tool.ERASE: "E"}
+
+
+def segment(source: FrameSource, project: Project, progress: Progress) -> Silhouettes:
+    """Segment the whole clip from the project's rectangles (paper Section 2.2)."""
+    roi = segment_clip(source, project.subject_rects, project.background_rects, progress=progress)
+    return Silhouettes(roi, "segmented")
+
+
+def sketched_silhouettes(project: Project, n_frames: int, shape_rc: tuple[int, int],
+                         progress: Progress) -> Silhouettes:
+    """Silhouettes made of the sketch strokes; frames without strokes count as lost."""
+    return Silhouettes(crop_sketches(project.strokes, n_frames, shape_rc, progress=progress), "sketched")
+
+
+def copied_strokes(project: Project, frame: int) -> list[Stroke]:
+    """The strokes of ``frame - 1`` moved unchanged onto ``frame``."""
+    return carry_strokes(project.strokes_on(frame - 1), frame)
+
+
+def propagated_strokes(source: FrameSource, project: Project, frame: int) -> list[Stroke]:
+    """The strokes of ``frame - 1`` moved onto ``frame`` by optical flow."""
+    return propagate_strokes(project.strokes_on(frame - 1), source.frame(frame - 1),
+                             source.frame(frame), to_frame=frame)
+
+
+class ToolsController(QObject):
+    """The Tools toolbar and menu actions; runs segmentation and stroke propagation."""
+
+    def __init__(self, state: AppState, view: FrameView, documents: DocumentController,
+                 parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self._state = state
+        self._view = view
+        self._documents = documents
+        self._segmenting: Job | None = None
+        self.toolbar = QToolBar("Tools")
+        self.toolbar.setObjectName("toolsToolBar")
+        self.tool_actions: dict[Tool, QAction] = {}
+        group = QActionGroup(self)
+        for tool, key in TOOL_KEYS.items():
+            action = QAction(tool.value.capitalize(), self, checkable=True)
+            action.setShortcut(QKeySequence(key))
+            action.setToolTip(f"{tool.value.capitalize()} ({key})")
+            action.triggered.connect(lambda _c=False, t=tool: view.set_tool(t))
+            group.addAction(action)
+            self.toolbar.addAction(action)
+            self.tool_actions[tool] = action
+        self.tool_actions[Tool.NAVIGATE].setChecked(True)
+        self.pen = QSpinBox(minimum=1, maximum=60, value=int(view.pen_width_px), suffix=" px")
+        self.pen.setToolTip("Pen width of new strokes")
+        self.pen.valueChanged.connect(lambda v: setattr(view, "pen_width_px", float(v)))
+        self.toolbar.addWidget(self.pen)
+        self.toolbar.addSeparator()
+        self.segment_action = self._action("Segment clip", "Ctrl+G", self.segment)
+        self.copy_action = self._action("Copy strokes from previous frame", "Ctrl+Shift+C",
+                                        self.copy_previous)
+        self.propagate_action = self._action("Propagate strokes by optical flow", "Ctrl+Shift+F",
+                                             self.propagate)
+        self.sketch_action = self._action("Use sketches as silhouettes", "Ctrl+Shift+K",
+                                          self.use_sketches)
+        for action in (self.segment_action, self.copy_action, self.propagate_action, self.sketch_action):
+            self.toolbar.addAction(action)
+
+    def _action(self, text: str, shortcut: str, slot) -> QAction:
+        action = QAction(text, self)
+        action.setShortcut(QKeySequence(shortcut))
+        action.triggered.connect(lambda _c=False: slot())
+        return action
+
+    # -- segmentation -----------------------------------------------------------------------
+    def segment(self) -> Job | None:
+        """Segment the clip in the background; the result is an undoable command."""
+        state, project, source = self._state, self._state.project, self._state.source
+        if source is None:
+            self._documents.messageRaised.emit("open footage first")
+            return None
+        if not project.subject_rects or not project.background_rects:
+            self._documents.asker.error(
+                "Segment clip", "Draw at least one subject rectangle (S) and one background "
+                "rectangle (B) on the first frame, then segment again.")
+            return None
+        if self._segmenting is not None:
+            return self._segmenting
+        job = Job(lambda progress: segment(source, project, progress), "Segmenting the clip")
+        job.finished.connect(self._segment_finished)
+        self._segmenting = job
+        self.segment_action.setEnabled(False)
+        return self._documents.run(job, lambda sil: state.undo_stack.push(
+            SetSilhouettesCommand(state, sil, "segment clip")))
+
+    def _segment_finished(self) -> None:
+        self._segmenting = None
+        self.segment_action.setEnabled(True)
+
+    def use_sketches(self) -> Job | None:
+        """Build the silhouettes from the sketch strokes of every frame."""
+        state, project, source = self._state, self._state.project, self._state.source
+        if source is None or not project.strokes:
+            self._documents.messageRaised.emit("draw strokes on the footage first (D)")
+            return None
+        n, shape = len(source), source.shape[:2]
+        job = Job(lambda progress: sketched_silhouettes(project, n, shape, progress),
+                  "Rasterizing the sketches")
+        return self._documents.run(job, lambda sil: state.undo_stack.push(
+            SetSilhouettesCommand(state, sil, "use sketches as silhouettes")))
+
+    # -- strokes ----------------------------------------------------------------------------
+    def copy_previous(self) -> None:
+        """Copy the previous frame's strokes onto the current frame (one undo step)."""
+        frame = self._state.frame
+        strokes = copied_strokes(self._state.project, frame) if frame > 0 else []
+        if not strokes:
+            self._documents.messageRaised.emit("the previous frame has no strokes to copy")
+            return
+        self._state.undo_stack.push(AddStrokesCommand(self._state, strokes,
+                                                      f"copy strokes from frame {frame - 1}"))
+
+    def propagate(self) -> Job | None:
+        """Move the previous frame's strokes onto this frame by optical flow (background job)."""
+        state, project, source, frame = self._state, self._state.project, self._state.source, self._state.frame
+        if source is None or frame == 0 or not project.strokes_on(frame - 1):
+            self._documents.messageRaised.emit("the previous frame has no strokes to propagate")
+            return None
+        job = Job(lambda _progress: propagated_strokes(source, project, frame),
+                  "Propagating strokes")
+        return self._documents.run(job, lambda strokes: state.undo_stack.push(
+            AddStrokesCommand(state, strokes, f"propagate strokes from frame {frame - 1}")))

@@ -1,0 +1,124 @@
+"""Project files: round trip, relative footage, atomic sidecar, clear errors, no pickles."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from gaitcore.errors import GaitInputError
+from gaitcore.io.project_file import (
+    VERSION, load_project, missing_footage, save_project, sidecar_dir,
+)
+from gaitcore.model import Rect, Stroke
+from gaitcore.pipeline import AnalysisSettings
+from gaitcore.project import Project, Silhouettes
+from gaitcore.silhouette import RoiClip
+
+
+def make_project(footage) -> Project:
+    rng = np.random.default_rng(0)
+    centers = rng.random((6, 2)) * 100
+    centers[2] = np.nan
+    lost = np.isnan(centers[:, 0])
+    roi = RoiClip(rng.random((6, 9, 7)) > 0.5, centers, lost, 0.5)
+    return Project(
+        footage=footage, frame_start=1, frame_stop=7, fps=24.0,
+        subject_rects=(Rect(1, 2, 30, 40),), background_rects=(Rect(0, 0, 5, 5), Rect(9, 9, 3, 3)),
+        strokes=(Stroke([[1.25, 2.5], [3.0, 4.125]], 3.5, 2), Stroke([[7.0, 7.0]], 2, 4)),
+        settings=AnalysisSettings(pcs=3, keys=5, switching=True, pinned=(1,), forbidden=(4, 5)),
+        alternates=(3, 5), key_poses={2: (1.0, -2.5)},
+        silhouettes=Silhouettes(roi, "segmented"),
+    )
+
+
+def test_round_trip_gives_the_same_project(tmp_path):
+    (tmp_path / "clip").mkdir()
+    project = make_project(tmp_path / "clip")
+    save_project(project, tmp_path / "p.gaitproj")
+    again = load_project(tmp_path / "p.gaitproj")
+    assert again == project
+    doc = json.loads((tmp_path / "p.gaitproj").read_text())
+    assert doc["format"] == "gaitstudio-project" and doc["version"] == VERSION
+    assert doc["footage"]["relative"] == "clip"
+
+
+def test_a_project_moved_with_its_footage_still_finds_it(tmp_path):
+    (tmp_path / "a" / "clip").mkdir(parents=True)
+    save_project(make_project(tmp_path / "a" / "clip"), tmp_path / "a" / "p.gaitproj")
+    (tmp_path / "a").rename(tmp_path / "b")
+    moved = load_project(tmp_path / "b" / "p.gaitproj")
+    assert moved.footage == tmp_path / "b" / "clip"
+    assert missing_footage(moved) is None
+
+
+def test_missing_footage_is_reported(tmp_path):
+    save_project(make_project(tmp_path / "gone"), tmp_path / "p.gaitproj")
+    assert missing_footage(load_project(tmp_path / "p.gaitproj")) == tmp_path / "gone"
+
+
+def test_saving_again_leaves_only_the_referenced_arrays_and_no_temp_files(tmp_path):
+    path = tmp_path / "p.gaitproj"
+    project = make_project(None)
+    save_project(project, path)
+    other = Silhouettes(RoiClip(np.ones((6, 4, 4), bool), np.zeros((6, 2)), np.zeros(6, bool)), "sketched")
+    save_project(Project(silhouettes=other), path)
+    names = sorted(f.name for f in sidecar_dir(path).iterdir())
+    assert len(names) == 3 and all(n.endswith(".npy") for n in names)
+    assert not [f for f in tmp_path.rglob("*.tmp")]
+    assert load_project(path).silhouettes == other
+
+
+@pytest.mark.parametrize("text, words", [
+    ("{not json", "damaged"),
+    ('{"format": "gaitstudio-project", "version": 1}', "damaged"),
+    ('{"format": "something-else", "version": 1}', "not a Gait Studio project"),
+    ('{"format": "gaitstudio-project", "version": 99}', "newer Gait Studio"),
+])
+def test_bad_files_raise_one_clear_message_and_are_not_changed(tmp_path, text, words):
+    path = tmp_path / "bad.gaitproj"
+    path.write_text(text)
+    with pytest.raises(GaitInputError, match=words):
+        load_project(path)
+    assert path.read_text() == text
+
+
+def test_a_newer_project_is_never_overwritten(tmp_path):
+    path = tmp_path / "new.gaitproj"
+    text = '{"format": "gaitstudio-project", "version": 99}'
+    path.write_text(text)
+    with pytest.raises(GaitInputError, match="not overwritten"):
+        save_project(Project(), path)
+    assert path.read_text() == text
+
+
+def test_pickled_arrays_are_refused(tmp_path):
+    path = tmp_path / "p.gaitproj"
+    save_project(make_project(None), path)
+    crops = json.loads(path.read_text())["silhouettes"]["arrays"]["crops"]
+    np.save(sidecar_dir(path) / crops, np.array([{"evil": 1}], dtype=object), allow_pickle=True)
+    with pytest.raises(GaitInputError, match="damaged"):
+        load_project(path)
+
+
+def test_a_missing_sidecar_folder_says_what_to_do(tmp_path):
+    path = tmp_path / "p.gaitproj"
+    save_project(make_project(None), path)
+    for f in sidecar_dir(path).iterdir():
+        f.unlink()
+    with pytest.raises(GaitInputError, match="keep the folder"):
+        load_project(path)
+
+
+def test_erasing_hits_only_strokes_of_the_frame_near_the_point():
+    project = make_project(None)
+    assert project.strokes_hit(2, (2.0, 3.2), 1.0) == {0}
+    assert project.strokes_hit(3, (2.0, 3.2), 1.0) == set()
+    assert project.strokes_hit(2, (30.0, 30.0), 1.0) == set()
+
+
+def test_pinning_a_dropped_frame_allows_it():
+    project = Project().with_key_constraint(4, pinned=None, forbidden=True)
+    pinned = project.with_key_constraint(4, pinned=True, forbidden=None)
+    assert pinned.settings.pinned == (4,) and pinned.settings.forbidden == ()
