@@ -80,7 +80,7 @@ class SegmentationSettings:
     grabcut_iters: int = 1
     reach_frac: float = 0.2
     reach_prob: int = 230
-    refit_every: int = 10
+    refit_every: int = 20
     keep_first: float = 0.5
     lost_area_ratio: float = 0.25
     min_area_frac: float = 1e-3
