@@ -75,9 +75,9 @@ def propose_alternates(
         The alternate is at least this many frames away from its key (the paper uses 3).
     theta : ndarray of shape (n,), optional
         Loop angle (see :func:`loop_angle`). When given and the clip covers a whole gait
-        cycle (two turns), candidates are restricted to frames whose half-cycle has the other
-        parity than the key's: on a clip of several cycles, the nearest frame may otherwise be
-        the same pose one cycle later, which resolves nothing.
+        cycle (two turns), candidates are restricted to frames an odd number of turns of the
+        loop away from the key (within half a turn): on a clip of several cycles, the nearest
+        frame may otherwise be the same pose one cycle later, which resolves nothing.
 
     Returns
     -------
@@ -96,16 +96,19 @@ def propose_alternates(
     p = np.asarray(projections, dtype=float)
     n = p.shape[0]
     frames = np.arange(n)
-    parity = None
-    if theta is not None and theta[-1] - theta[0] >= 2 * TWO_PI:
-        parity = np.floor((theta - theta[0]) / TWO_PI).astype(int) % 2
+    use_phase = theta is not None and theta[-1] - theta[0] >= 2 * TWO_PI
     out = []
     for k in key_frames:
         if not 0 <= k < n:
             raise GaitInputError(f"key frame {k} is outside the clip (0..{n - 1})")
         ok = np.abs(frames - k) >= min_gap
-        if parity is not None and np.any(ok & (parity != parity[k])):
-            ok &= parity != parity[k]
+        if use_phase:
+            # Turns of the loop between each frame and the key, modulo a gait cycle (2 turns):
+            # about 1 in the other half-cycle, about 0 or 2 for the same pose a cycle away.
+            turns = np.mod((theta - theta[k]) / TWO_PI, 2.0)
+            other_half = (turns >= 0.5) & (turns < 1.5)
+            if np.any(ok & other_half):
+                ok &= other_half
         if not ok.any():
             raise GaitInputError(
                 f"no frame is at least {min_gap} frames away from key {k}: the clip is too "

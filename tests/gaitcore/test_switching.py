@@ -94,3 +94,17 @@ def test_bad_input():
         SwitchingModel.fit(coords, theta, (1, 6), (6, 26), {})
     with pytest.raises(GaitInputError, match="too short"):
         propose_alternates(coords[:3], (1,))
+
+
+def test_alternates_are_an_odd_number_of_turns_away_for_every_key():
+    # Regression: half-cycle parity taken as floor(turns since frame 0) split a key lying
+    # just past a boundary (1.02 turns) from the same pose one cycle later (2.97 turns), and
+    # that frame was proposed as its "alternate". What counts is the turns between the two.
+    coords, _ = _ambiguous_walk(n=120, period=40.0)
+    w = 2 * np.pi * np.arange(120) / 40.0
+    coords = coords + 0.15 * np.column_stack([np.cos(w), np.sin(w)])  # half-cycles differ a bit
+    theta = loop_angle(coords)
+    keys = tuple(range(120))
+    for key, alt in zip(keys, propose_alternates(coords, keys, theta=theta)):
+        turns = abs(theta[alt] - theta[key]) / (2 * np.pi)
+        assert abs(turns % 2 - 1) < 0.5, (key, alt, turns)
