@@ -70,6 +70,9 @@ def _add_analyze(sub) -> None:
                    help="frames that must be key-images")
     p.add_argument("--forbid", type=_frame_list, default=(), metavar="F,F",
                    help="frames that must not be key-images")
+    p.add_argument("--paper-roi", action="store_true",
+                   help="centre each crop on its own frame's centre of mass, as the paper does "
+                   "(default: on the track averaged over one gait period)")
     p.add_argument("--key-time-limit", type=float, default=60.0, metavar="SECONDS",
                    help="time budget of the exact key search (default 60)")
     p.add_argument("--json", action="store_true", help="print analysis.json on stdout")
@@ -88,6 +91,7 @@ def _run_analyze(args: argparse.Namespace) -> int:
         pinned=args.pin,
         forbidden=args.forbid,
         key_time_limit_s=args.key_time_limit,
+        stabilize_roi=not args.paper_roi,
     )
     roi = load_silhouettes(args.input, args.out, subject=args.subject, background=args.background,
                            max_side=settings.max_side_px)
@@ -228,6 +232,8 @@ def _add_evaluate(sub) -> None:
     p.add_argument("--elevation", type=float, default=0.0, help="camera elevation, deg")
     p.add_argument("--mask-noise", type=float, default=0.0, metavar="FRACTION",
                    help="fraction of mask pixels flipped at random (e.g. 0.05)")
+    p.add_argument("--paper-roi", action="store_true",
+                   help="centre crops on each frame's centre of mass, as the paper does")
     p.add_argument("--plots", type=Path, default=None, metavar="DIR",
                    help="write PNG figures like the paper's Figures 3 and 6")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
@@ -241,7 +247,8 @@ def _run_evaluate(args: argparse.Namespace) -> int:
         gait=args.gait, n_frames=args.frames, width=args.width, height=args.height,
         yaw_deg=args.yaw, elevation_deg=args.elevation, mask_noise=args.mask_noise,
     )
-    ev = evaluate_gait(settings, pcs=args.pcs, keys=args.keys, switching=args.switching)
+    ev = evaluate_gait(settings, pcs=args.pcs, keys=args.keys, switching=args.switching,
+                       stabilize_roi=not args.paper_roi)
     if args.plots is not None:
         from gaitcore.plots import plot_error_curves, plot_trajectory
 

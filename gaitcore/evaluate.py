@@ -153,6 +153,7 @@ def evaluate_gait(
     pcs: Sequence[int] = (1, 2, 3, 4, 5),
     keys: Sequence[int] = (2, 3, 4, 5),
     switching: bool = False,
+    stabilize_roi: bool = True,
     progress: Progress | None = None,
 ) -> Evaluation:
     """Run the Section 4 experiment on one synthetic gait.
@@ -165,6 +166,9 @@ def evaluate_gait(
     switching : bool
         Also evaluate switching models (keys + as many alternates) for every cell (paper
         Section 3.2; meant for walks).
+    stabilize_roi : bool
+        Centre the crops on the period-averaged track (False: on each frame's centre of
+        mass, as the paper does).
     progress : callable(done, total) -> bool, optional
         Reports the rendering.
 
@@ -182,12 +186,15 @@ def evaluate_gait(
         raise GaitInputError("--pcs and --keys need positive numbers")
     skeleton, truth, masks = render_bench_clip(settings, progress=progress)
     idx = skeleton.sagittal_angle_indices
-    base = analyze_silhouettes(crop_rois(masks), AnalysisSettings(pcs=1, keys=min(keys)))
+    base = analyze_silhouettes(
+        crop_rois(masks), AnalysisSettings(pcs=1, keys=min(keys), stabilize_roi=stabilize_roi)
+    )
     grid: list[GridCell] = []
     analyses: dict[tuple[int, int], Analysis] = {}
     for c in pcs:
         for m in keys:
-            a = rekey(base, AnalysisSettings(pcs=c, keys=m, switching=switching))
+            a = rekey(base, AnalysisSettings(pcs=c, keys=m, switching=switching,
+                                             stabilize_roi=stabilize_roi))
             analyses[(c, m)] = a
             posed = {f: truth[f] for f in a.posed_frames}
             pred = animate(a.coords, a.key_frames, posed)

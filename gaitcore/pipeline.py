@@ -16,8 +16,8 @@ from gaitcore.errors import GaitInputError
 from gaitcore.image_pca import ImagePCA
 from gaitcore.keyimages import KeySelection, select_key_images
 from gaitcore.rbf import DEFAULT_ALPHA, RBFPoseMap
-from gaitcore.silhouette import RoiClip
-from gaitcore.spectrum import Diagnosis, diagnose
+from gaitcore.silhouette import RoiClip, stabilize_rois
+from gaitcore.spectrum import Diagnosis, Verdict, diagnose
 from gaitcore.switching import SwitchingModel, loop_angle, propose_alternates
 
 Progress = Callable[[int, int], bool]
@@ -43,6 +43,9 @@ class AnalysisSettings:
     max_side_px : int or None
         ROI crops are shrunk (area averaging) so their longer side is at most this, to keep
         PCA cheap on long clips; None keeps full resolution.
+    stabilize_roi : bool
+        Re-centre the crops on the track averaged over one gait period found by a first
+        diagnosis (:func:`gaitcore.silhouette.stabilize_rois`), then analyse again.
     key_time_limit_s : float or None
         Time budget of the exact key search; past it the best set found is used and the
         result is reported as not proven optimal.
@@ -55,6 +58,7 @@ class AnalysisSettings:
     switching: bool = False
     alpha: float = DEFAULT_ALPHA
     max_side_px: int | None = 160
+    stabilize_roi: bool = True
     key_time_limit_s: float | None = 60.0
     pinned: tuple[int, ...] = ()
     forbidden: tuple[int, ...] = ()
@@ -160,23 +164,16 @@ def analyze_silhouettes(
     GaitInputError
         Too few frames for the requested keys, no motion, too few distinct silhouettes.
     """
-    n = roi.crops.shape[0]
     found = np.nonzero(~roi.lost)[0]
     if found.size < max(settings.keys, 2) + 1:
         raise GaitInputError(
             f"only {found.size} frame(s) with a subject for {settings.keys} key-images; "
             "use a longer clip or fewer keys"
         )
-    images = working_images(roi, settings.max_side_px)
-    pca = ImagePCA.fit(images[found], n_components=max(N_DIAGNOSIS_PCS, settings.pcs))
-    proj = np.empty((n, pca.n_components))
-    proj[found] = pca.projections
-    if found.size < n:
-        for k in range(pca.n_components):
-            proj[:, k] = np.interp(np.arange(n), found, pca.projections[:, k])
-    lost = tuple(int(t) for t in np.nonzero(roi.lost)[0])
-    diag_input = proj if proj.shape[1] >= 2 else np.column_stack([proj, np.zeros(n)])
-    diagnosis = diagnose(diag_input, sketched=sketched)
+    pca, proj, diagnosis = _describe(roi, settings, sketched)
+    if settings.stabilize_roi and diagnosis.verdict is not Verdict.NOT_USABLE:
+        roi = stabilize_rois(roi, diagnosis.period_frames)
+        pca, proj, diagnosis = _describe(roi, settings, sketched)
     theta = loop_angle(diagnosis.filtered)
     for arr in (proj, theta):
         arr.setflags(write=False)
@@ -184,12 +181,30 @@ def analyze_silhouettes(
         settings=settings,
         pca=pca,
         projections=proj,
-        lost_frames=lost,
+        lost_frames=tuple(int(t) for t in np.nonzero(roi.lost)[0]),
         diagnosis=diagnosis,
         selection=KeySelection(frames=(), condition_number=float("nan"), exact=False, nodes_visited=0),
         loop_angle=theta,
     )
     return rekey(motion, settings, progress=progress)
+
+
+def _describe(
+    roi: RoiClip, settings: AnalysisSettings, sketched: bool
+) -> tuple[ImagePCA, np.ndarray, Diagnosis]:
+    """PCA of the crops where the subject was found, projections of every frame (lost ones
+    interpolated in time), and the spectral diagnosis."""
+    n = roi.crops.shape[0]
+    found = np.nonzero(~roi.lost)[0]
+    images = working_images(roi, settings.max_side_px)
+    pca = ImagePCA.fit(images[found], n_components=max(N_DIAGNOSIS_PCS, settings.pcs))
+    proj = np.empty((n, pca.n_components))
+    proj[found] = pca.projections
+    if found.size < n:
+        for k in range(pca.n_components):
+            proj[:, k] = np.interp(np.arange(n), found, pca.projections[:, k])
+    diag_input = proj if proj.shape[1] >= 2 else np.column_stack([proj, np.zeros(n)])
+    return pca, proj, diagnose(diag_input, sketched=sketched)
 
 
 def rekey(

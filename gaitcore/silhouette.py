@@ -309,6 +309,52 @@ def crop_rois(
     return acc.finish(margin=margin, max_side=max_side)
 
 
+def stabilize_rois(roi: RoiClip, period_frames: float) -> RoiClip:
+    """Re-centre every crop on the subject's track averaged over one gait period.
+
+    Parameters
+    ----------
+    roi : RoiClip
+        Crops centred on each frame's own centre of mass.
+    period_frames : float
+        Gait period (from a first diagnosis); the moving average spans this many frames.
+
+    Returns
+    -------
+    RoiClip
+        Crops, padded just enough, centred on the smoothed track (``centers_xy``).
+
+    Notes
+    -----
+    The paper centres the window on each frame's centre of mass (Section 2.2), which
+    follows the legs' swing as much as the animal's travel and throws away the body's
+    vertical motion. A moving average over exactly one period cancels the per-stride wobble
+    (its zeros fall on the gait frequency and its harmonics) while following the travel, so
+    the window stops jittering with the stride and the body's bounce stays in the images.
+    """
+    n = roi.crops.shape[0]
+    width = int(round(period_frames))
+    found = np.nonzero(~roi.lost)[0]
+    if width < 2 or found.size < 2:
+        return roi
+    t = np.arange(n)
+    raw = np.column_stack([np.interp(t, found, roi.centers_xy[found, k]) for k in range(2)])
+    kernel = np.ones(width) / width
+    padded = np.pad(raw, ((width, width), (0, 0)), mode="edge")
+    smooth = np.column_stack([np.convolve(padded[:, k], kernel, mode="same") for k in range(2)])
+    smooth = smooth[width:-width]
+    shift = np.round((raw - smooth) * roi.scale).astype(int)  # (dx, dy) in crop pixels
+    shift[roi.lost] = 0
+    pad_x, pad_y = np.abs(shift).max(axis=0)
+    rows, cols = roi.crops.shape[1:]
+    crops = np.zeros((n, rows + 2 * pad_y, cols + 2 * pad_x), dtype=roi.crops.dtype)
+    for f in found:
+        y0, x0 = pad_y + shift[f, 1], pad_x + shift[f, 0]
+        crops[f, y0 : y0 + rows, x0 : x0 + cols] = roi.crops[f]
+    centers = np.where(roi.lost[:, None], np.nan, smooth)
+    return RoiClip(crops=crops, centers_xy=centers, lost=roi.lost, scale=roi.scale)
+
+
 def fill_holes(mask: np.ndarray) -> np.ndarray:
     """Fill the holes of a binary mask (flood fill of the outside from the border).
 
