@@ -339,10 +339,7 @@ def stabilize_rois(roi: RoiClip, period_frames: float) -> RoiClip:
         return roi
     t = np.arange(n)
     raw = np.column_stack([np.interp(t, found, roi.centers_xy[found, k]) for k in range(2)])
-    kernel = np.ones(width) / width
-    padded = np.pad(raw, ((width, width), (0, 0)), mode="edge")
-    smooth = np.column_stack([np.convolve(padded[:, k], kernel, mode="same") for k in range(2)])
-    smooth = smooth[width:-width]
+    smooth = np.column_stack([_period_average(raw[:, k], width) for k in range(2)])
     shift = np.round((raw - smooth) * roi.scale).astype(int)  # (dx, dy) in crop pixels
     shift[roi.lost] = 0
     pad_x, pad_y = np.abs(shift).max(axis=0)
@@ -353,6 +350,24 @@ def stabilize_rois(roi: RoiClip, period_frames: float) -> RoiClip:
         crops[f, y0 : y0 + rows, x0 : x0 + cols] = roi.crops[f]
     centers = np.where(roi.lost[:, None], np.nan, smooth)
     return RoiClip(crops=crops, centers_xy=centers, lost=roi.lost, scale=roi.scale)
+
+
+def _period_average(track: np.ndarray, width: int) -> np.ndarray:
+    """Moving average over ``width`` frames, continued linearly over the half-period at each
+    end (padding with the end value would leave the stride's wobble there)."""
+    n = track.size
+    if n < 2 * width:
+        return np.polyval(np.polyfit(np.arange(n), track, 1), np.arange(n))
+    valid = np.convolve(track, np.ones(width) / width, mode="valid")
+    at = np.arange(valid.size) + (width - 1) / 2.0
+    t = np.arange(n, dtype=float)
+    out = np.interp(t, at, valid)
+    head, tail = t < at[0], t > at[-1]
+    slope_head = (valid[width] - valid[0]) / width
+    slope_tail = (valid[-1] - valid[-1 - width]) / width
+    out[head] = valid[0] + (t[head] - at[0]) * slope_head
+    out[tail] = valid[-1] + (t[tail] - at[-1]) * slope_tail
+    return out
 
 
 def fill_holes(mask: np.ndarray) -> np.ndarray:
