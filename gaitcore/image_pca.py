@@ -122,12 +122,14 @@ class ImagePCA:
         n = arr.shape[0]
         flat = arr.reshape(n, -1)
         d = flat.shape[1]
+        # Scaled like _as_float_stack: 0/255 masks and grey levels map to [0, 1].
+        scale = 255.0 if np.issubdtype(flat.dtype, np.integer) and flat.max(initial=0) > 1 else 1.0
         mean = np.zeros(d)
         sq_sum = 0.0
-        for rows in _chunks(flat):
+        for rows in _chunks(flat, scale):
             mean += rows.sum(axis=0)
         mean /= n
-        for rows in _chunks(flat):
+        for rows in _chunks(flat, scale):
             sq_sum += float(((rows - mean) ** 2).sum())
         total = sq_sum / n
         if total <= 0:
@@ -137,13 +139,13 @@ class ImagePCA:
         def times(v: np.ndarray) -> np.ndarray:  # (X - mean) @ v, shape (n, l)
             out = np.empty((n, v.shape[1]))
             shift = mean @ v
-            for i, rows in enumerate(_chunks(flat)):
+            for i, rows in enumerate(_chunks(flat, scale)):
                 out[i * _CHUNK_ROWS : i * _CHUNK_ROWS + rows.shape[0]] = rows @ v - shift
             return out
 
         def times_t(u: np.ndarray) -> np.ndarray:  # (X - mean).T @ u, shape (d, l)
             acc = -np.outer(mean, u.sum(axis=0))
-            for i, rows in enumerate(_chunks(flat)):
+            for i, rows in enumerate(_chunks(flat, scale)):
                 acc += rows.T @ u[i * _CHUNK_ROWS : i * _CHUNK_ROWS + rows.shape[0]]
             return acc
 
@@ -234,9 +236,8 @@ _IDENTICAL = (
 )
 
 
-def _chunks(flat: np.ndarray):
-    """Rows of ``flat`` as float64 blocks of _CHUNK_ROWS, scaled like :func:`_as_float_stack`."""
-    scale = 255.0 if np.issubdtype(flat.dtype, np.integer) and flat.max(initial=0) > 1 else 1.0
+def _chunks(flat: np.ndarray, scale: float):
+    """Rows of ``flat`` as float64 blocks of _CHUNK_ROWS, divided by ``scale``."""
     for i in range(0, flat.shape[0], _CHUNK_ROWS):
         yield flat[i : i + _CHUNK_ROWS].astype(float) / scale
 

@@ -127,7 +127,8 @@ def working_images(roi: RoiClip, max_side_px: int | None) -> np.ndarray:
     Returns
     -------
     ndarray of shape (n, rows, cols)
-        The crops themselves (bool) when they are small enough, else float32 in [0, 1].
+        The crops themselves (bool) when they are small enough, else uint8 grey levels
+        0..255 (a quarter of the memory of floats, which matters on long clips).
     """
     crops = roi.crops
     rows, cols = crops.shape[1:]
@@ -135,9 +136,10 @@ def working_images(roi: RoiClip, max_side_px: int | None) -> np.ndarray:
     if scale >= 1.0:
         return crops
     size = (max(1, round(cols * scale)), max(1, round(rows * scale)))
-    return np.stack(
-        [cv2.resize(c.astype(np.float32), size, interpolation=cv2.INTER_AREA) for c in crops]
-    )
+    out = np.empty((crops.shape[0], size[1], size[0]), dtype=np.uint8)
+    for i, c in enumerate(crops):
+        out[i] = cv2.resize(c.astype(np.uint8) * np.uint8(255), size, interpolation=cv2.INTER_AREA)
+    return out
 
 
 def analyze_silhouettes(
@@ -197,7 +199,9 @@ def _describe(
     n = roi.crops.shape[0]
     found = np.nonzero(~roi.lost)[0]
     images = working_images(roi, settings.max_side_px)
-    pca = ImagePCA.fit(images[found], n_components=max(N_DIAGNOSIS_PCS, settings.pcs))
+    if found.size < n:
+        images = images[found]
+    pca = ImagePCA.fit(images, n_components=max(N_DIAGNOSIS_PCS, settings.pcs))
     proj = np.empty((n, pca.n_components))
     proj[found] = pca.projections
     if found.size < n:
