@@ -3,7 +3,8 @@
 Everything the artist makes on a clip lives in one :class:`Project` value: the footage and its
 frame range, the segmentation rectangles drawn on the first frame, the sketch strokes, the
 analysis settings (with pinned and forbidden key-images), the alternates accepted for the
-switching models and, for part 2 of the application, a pose per key frame. The tracked
+switching models, the skeleton being posed (None: the bundled horse template) and a pose per
+posed frame (key-images and accepted alternates). The tracked
 silhouettes are kept too (:class:`Silhouettes`), because segmenting a long clip is slow; the
 analysis itself is recomputed from them when a project is opened.
 
@@ -24,6 +25,7 @@ from gaitcore.errors import GaitInputError
 from gaitcore.model import Rect, Stroke
 from gaitcore.pipeline import AnalysisSettings
 from gaitcore.silhouette import RoiClip
+from gaitcore.skeleton import Skeleton
 
 ORIGINS = ("segmented", "sketched", "masks")
 """Where silhouettes come from: colour segmentation, sketch strokes, or a folder of masks."""
@@ -109,7 +111,11 @@ class Project:
     alternates : tuple of int
         Alternate frames the artist accepted for the switching models (paper Section 3.2).
     key_poses : mapping of int to tuple of float
-        Pose vector per posed frame (part 2 of the application; kept through saves).
+        Pose vector per posed frame, laid out as the skeleton's ``channel_names`` (metres,
+        degrees). Poses of frames that are no longer keys are kept (nothing is lost when the
+        artist changes the key set and back).
+    skeleton : Skeleton or None
+        The rig being posed; None means the bundled ``horse`` template.
     silhouettes : Silhouettes or None
         The tracked silhouettes, once segmented, sketched or read from masks.
     """
@@ -125,6 +131,7 @@ class Project:
     alternates: tuple[int, ...] = ()
     key_poses: Mapping[int, tuple[float, ...]] = field(default_factory=dict)
     silhouettes: Silhouettes | None = None
+    skeleton: Skeleton | None = None
 
     def __post_init__(self) -> None:
         if self.footage is not None:
@@ -143,11 +150,7 @@ class Project:
         if not isinstance(other, Project):
             return NotImplemented
         names = self.__dataclass_fields__
-        return all(
-            dict(getattr(self, k)) == dict(getattr(other, k)) if k == "key_poses"
-            else getattr(self, k) == getattr(other, k)
-            for k in names
-        )
+        return all(_field_equal(k, getattr(self, k), getattr(other, k)) for k in names)
 
     __hash__ = None  # type: ignore[assignment]
 
@@ -207,6 +210,24 @@ class Project:
         settings = replace(self.settings, pinned=tuple(sorted(pin)), forbidden=tuple(sorted(forb)))
         return replace(self, settings=settings)
 
+    def with_pose(self, frame: int, pose: np.ndarray | None) -> "Project":
+        """A copy where ``frame`` has pose vector ``pose`` (None removes its pose).
+
+        Raises
+        ------
+        GaitInputError
+            A pose that is not a flat vector of finite numbers.
+        """
+        poses = dict(self.key_poses)
+        if pose is None:
+            poses.pop(int(frame), None)
+        else:
+            p = np.asarray(pose, dtype=float)
+            if p.ndim != 1 or not np.all(np.isfinite(p)):
+                raise GaitInputError(f"a pose must be a flat vector of finite numbers, got shape {p.shape}")
+            poses[int(frame)] = tuple(p.tolist())
+        return replace(self, key_poses=poses)
+
     def strokes_hit(self, frame: int, xy: tuple[float, float], radius_px: float) -> set[int]:
         """Positions in :attr:`strokes` of the strokes of ``frame`` passing near ``xy``.
 
@@ -219,6 +240,14 @@ class Project:
             if s.frame == frame and _distance_to_polyline(s.points_xy, p) <= s.width_px / 2 + radius_px:
                 hits.add(i)
         return hits
+
+
+def _field_equal(name: str, a, b) -> bool:
+    if name == "key_poses":
+        return dict(a) == dict(b)
+    if name == "skeleton" and a is not None and b is not None:
+        return a is b or a.to_dict() == b.to_dict()
+    return a == b
 
 
 def _distance_to_polyline(points_xy: np.ndarray, p: np.ndarray) -> float:

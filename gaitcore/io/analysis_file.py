@@ -90,6 +90,28 @@ def read_analysis_json(path: str | Path) -> AnalysisRecord:
         raise GaitInputError(f"analysis file not found: {path}; run 'gaitcore analyze' first") from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise GaitInputError(f"{path} is not a readable analysis file ({exc})") from None
+    return analysis_record_from_dict(data, where=str(path))
+
+
+def analysis_record(analysis: Analysis) -> AnalysisRecord:
+    """The :class:`AnalysisRecord` that ``analysis.json`` of ``analysis`` would give back.
+
+    The numbers are exactly those :func:`read_analysis_json` reads from the file written by
+    :func:`write_analysis_json` (JSON keeps every float exactly), so the GUI and
+    ``gaitcore animate`` compute bit-identical curves from one analysis.
+    """
+    return analysis_record_from_dict(analysis_to_dict(analysis), where="analysis")
+
+
+def analysis_record_from_dict(data: object, *, where: str = "analysis") -> AnalysisRecord:
+    """Check the parsed content of an ``analysis.json`` and turn it into a record.
+
+    Raises
+    ------
+    GaitInputError
+        Not an analysis, a newer version, missing or malformed fields, inconsistent content.
+    """
+    path = where
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise GaitInputError(f"{path} is not a Gait Studio analysis file")
     if data.get("version", 0) > VERSION:

@@ -28,6 +28,7 @@ from gaitcore.model import Rect, Stroke
 from gaitcore.pipeline import AnalysisSettings
 from gaitcore.project import Project, Silhouettes
 from gaitcore.silhouette import RoiClip
+from gaitcore.skeleton import Skeleton
 
 FORMAT = "gaitstudio-project"
 VERSION = 1
@@ -142,6 +143,7 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
                      for k, v in asdict(project.settings).items()},
         "alternates": list(project.alternates),
         "key_poses": {str(k): list(v) for k, v in sorted(project.key_poses.items())},
+        "skeleton": None if project.skeleton is None else project.skeleton.to_dict(),
         "silhouettes": sil,
     }
 
@@ -173,6 +175,7 @@ def _from_json(doc: dict, p: Path) -> Project:
         alternates=tuple(int(f) for f in doc["alternates"]),
         key_poses={int(k): tuple(v) for k, v in doc["key_poses"].items()},
         silhouettes=None if sil is None else _read_silhouettes(sil, sidecar_dir(p)),
+        skeleton=None if doc.get("skeleton") is None else Skeleton.from_json(doc["skeleton"]),
     )
 
 

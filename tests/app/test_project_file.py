@@ -122,3 +122,19 @@ def test_pinning_a_dropped_frame_allows_it():
     project = Project().with_key_constraint(4, pinned=None, forbidden=True)
     pinned = project.with_key_constraint(4, pinned=True, forbidden=None)
     assert pinned.settings.pinned == (4,) and pinned.settings.forbidden == ()
+
+
+def test_the_posed_skeleton_and_poses_survive_a_round_trip(tmp_path):
+    from gaitcore.skeleton import load_template
+
+    skeleton = load_template("horse")
+    pose = np.linspace(-5, 5, skeleton.n_channels)
+    project = Project(skeleton=skeleton).with_pose(7, pose)
+    save_project(project, tmp_path / "s.gaitproj")
+    again = load_project(tmp_path / "s.gaitproj")
+    assert again == project
+    assert again.skeleton.channel_names == skeleton.channel_names
+    np.testing.assert_array_equal(again.key_poses[7], pose)
+    assert project.with_pose(7, None).key_poses == {}
+    with pytest.raises(GaitInputError):
+        project.with_pose(3, [1.0, float("nan")])
