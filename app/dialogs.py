@@ -9,7 +9,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from PySide6.QtWidgets import QFileDialog, QMessageBox, QWidget
+from PySide6.QtWidgets import QFileDialog, QInputDialog, QMessageBox, QWidget
 
 from gaitcore.io.project_file import SUFFIX
 
@@ -81,6 +81,32 @@ class Asker:
             "(No deletes the copy.)")
         return answer == QMessageBox.StandardButton.Yes
 
+    def open_file(self, title: str, file_filter: str) -> Path | None:
+        """A file to read, e.g. a pose table or a BVH (None: cancelled)."""
+        path, _ = QFileDialog.getOpenFileName(self._parent, title, "", f"{file_filter};;All files (*)")
+        return Path(path) if path else None
+
+    def export_path(self, title: str, suggested: Path, file_filter: str) -> Path | None:
+        """Where to write an export (None: cancelled); the suggested suffix is added if missing."""
+        path, _ = QFileDialog.getSaveFileName(self._parent, title, str(suggested), file_filter)
+        if not path:
+            return None
+        p = Path(path)
+        return p if p.suffix else p.with_suffix(suggested.suffix)
+
+    def confirm(self, title: str, message: str) -> bool:
+        """Ask before a change that drops work (it stays undoable); True to go on."""
+        answer = QMessageBox.question(self._parent, title, message)
+        return answer == QMessageBox.StandardButton.Yes
+
+    def choose_frame(self, title: str, frames: list[int]) -> int | None:
+        """One of ``frames`` (None: cancelled)."""
+        if frames == list(range(frames[0], frames[0] + len(frames))):
+            value, ok = QInputDialog.getInt(self._parent, title, "Frame:", frames[0], frames[0], frames[-1])
+            return value if ok else None
+        item, ok = QInputDialog.getItem(self._parent, title, "Frame:", [str(f) for f in frames], 0, False)
+        return int(item) if ok else None
+
 
 class HeadlessAsker(Asker):
     """Answers without asking, for ``--screenshot`` runs: errors go to stderr and are kept.
@@ -116,3 +142,15 @@ class HeadlessAsker(Asker):
 
     def recover(self, description: str) -> bool:
         return False
+
+    def open_file(self, title: str, file_filter: str) -> Path | None:
+        return None
+
+    def export_path(self, title: str, suggested: Path, file_filter: str) -> Path | None:
+        return None
+
+    def confirm(self, title: str, message: str) -> bool:
+        return False
+
+    def choose_frame(self, title: str, frames: list[int]) -> int | None:
+        return None

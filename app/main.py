@@ -14,6 +14,10 @@ from pathlib import Path
 
 os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+if os.environ["PYOPENGL_PLATFORM"] == "egl":
+    # PyOpenGL on EGL (which pyrender needs) only sees EGL contexts: make Qt's X11 windows
+    # use EGL too, or the 3D viewport would draw nothing under X11/Xvfb.
+    os.environ.setdefault("QT_XCB_GL_INTEGRATION", "xcb_egl")
 
 SCREENSHOT_TIMEOUT_MS = 120_000
 _POLL_MS = 100
@@ -34,6 +38,9 @@ def main(argv: list[str] | None = None) -> int:
     from PySide6.QtCore import QTimer
     from PySide6.QtWidgets import QApplication
 
+    from app.widgets.skeleton_gl import share_gl_resources
+
+    share_gl_resources()
     app = QApplication.instance() or QApplication(sys.argv[:1])
     app.setOrganizationName("GaitStudio")
     app.setApplicationName("Gait Studio")
@@ -87,7 +94,7 @@ def _schedule_screenshot(window, path: Path, asker, status: dict) -> None:
             return  # ready for three polls in a row: every queued repaint has run
         timer.stop()
         path.parent.mkdir(parents=True, exist_ok=True)
-        saved = window.grab().save(str(path))
+        saved = window.snapshot().save(str(path))
         if timed_out or not saved or asker.errors:
             why = (f"cannot write {path}" if not saved else "saved after an error" if asker.errors
                    else "timed out before the window was loaded")

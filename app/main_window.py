@@ -10,21 +10,27 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from PySide6.QtCore import QSettings, QStandardPaths, Qt
-from PySide6.QtGui import QAction, QKeySequence
-from PySide6.QtWidgets import QDockWidget, QMainWindow, QMenu, QWidget
+from PySide6.QtCore import QPoint, QRect, QSettings, QStandardPaths, Qt
+from PySide6.QtGui import QAction, QKeySequence, QPainter, QPixmap
+from PySide6.QtWidgets import QDockWidget, QMainWindow, QMenu, QSplitter, QWidget
 
 from app.analysis_controller import AnalysisController
+from app.animation import AnimationController
 from app.autosave import Autosaver, find_recovery_copies
 from app.dialogs import Asker
 from app.document import DocumentController
+from app.export import KINDS, ExportController
 from app.playback import Player
+from app.posing import PosingController
 from app.state import AppState
 from app.tools import ToolsController
+from app.widgets.animation_view import AnimationView
 from app.widgets.diagnosis_panel import DiagnosisPanel
 from app.widgets.eigen_view import EigenImagesView
 from app.widgets.frame_view import FrameView
 from app.widgets.pc_plot import PCPlotWidget
+from app.widgets.pose_panel import PosePanel
+from app.widgets.pose_viewport import PoseViewport
 from app.widgets.timeline import TimelineWidget
 from app.workers import FrameLoader, JobRunner
 
@@ -66,24 +72,42 @@ class MainWindow(QMainWindow):
         self.documents = DocumentController(self.state, self.asker, self.runner, self.autosaver, self)
         self.analysis = AnalysisController(self.state, self.runner, self)
         self.player = Player(self.state, self)
+        self.posing = PosingController(self.state, self.asker, self)
+        self.animator = AnimationController(self.state, self)
+        self.exporter = ExportController(self.state, self.animator, self.documents, self)
 
         self.frame_view = FrameView(self.state, self.loader)
-        self.setCentralWidget(self.frame_view)
         self.timeline = TimelineWidget(self.state)
         self.pc_plot = PCPlotWidget(self.state)
         self.diagnosis = DiagnosisPanel(self.state)
         self.eigen = EigenImagesView(self.state)
+        self.viewport = PoseViewport(self.state, self.loader, self.posing, self.animator)
+        self.views = QSplitter(Qt.Orientation.Horizontal)  # footage and skeleton side by side
+        self.views.addWidget(self.frame_view)
+        self.views.addWidget(self.viewport)
+        self.views.setChildrenCollapsible(False)
+        self.frame_view.setMinimumSize(240, 180)
+        self.setCentralWidget(self.views)
+        self.pose_panel = PosePanel(self.state, self.posing)
+        self.animation_view = AnimationView(self.state, self.animator, self.posing)
         self.docks = {
             "timeline": self._dock("Timeline", self.timeline, Qt.DockWidgetArea.BottomDockWidgetArea),
+            "animation": self._dock("Animation weights", self.animation_view, Qt.DockWidgetArea.BottomDockWidgetArea),
             "pcs": self._dock("PC1 × PC2 and key-images", self.pc_plot, Qt.DockWidgetArea.RightDockWidgetArea),
             "diagnosis": self._dock("Diagnosis", self.diagnosis, Qt.DockWidgetArea.RightDockWidgetArea),
+            "posing": self._dock("Posing", self.pose_panel, Qt.DockWidgetArea.LeftDockWidgetArea),
             "eigen": self._dock("Eigen-images", self.eigen, Qt.DockWidgetArea.LeftDockWidgetArea),
         }
+        self.splitDockWidget(self.docks["timeline"], self.docks["animation"], Qt.Orientation.Vertical)
+        self.tabifyDockWidget(self.docks["pcs"], self.docks["diagnosis"])
+        self.tabifyDockWidget(self.docks["posing"], self.docks["eigen"])
+        self.docks["pcs"].raise_()
+        self.docks["posing"].raise_()
         self.tools = ToolsController(self.state, self.frame_view, self.documents, self)
         self.addToolBar(self.tools.toolbar)
         self._build_menus()
 
-        for source in (self.frame_view, self.pc_plot, self.documents):
+        for source in (self.frame_view, self.pc_plot, self.documents, self.posing):
             source.messageRaised.connect(self._show_message)
         self.state.analysisFailed.connect(self._show_message)
         self.state.undo_stack.cleanChanged.connect(self._update_title)
@@ -91,7 +115,9 @@ class MainWindow(QMainWindow):
         self.state.sourceChanged.connect(self._update_title)
         self.documents.recentChanged.connect(self._fill_recent)
         self.resize(1500, 950)
-        self.resizeDocks([self.docks["eigen"], self.docks["pcs"]], [300, 520], Qt.Orientation.Horizontal)
+        self.resizeDocks([self.docks["posing"], self.docks["pcs"]], [300, 380], Qt.Orientation.Horizontal)
+        self.views.setSizes([500, 500])
+        self.resizeDocks([self.docks["timeline"], self.docks["animation"]], [70, 170], Qt.Orientation.Vertical)
         if remember_layout:
             self._restore_layout()
         self._update_title()
@@ -122,6 +148,12 @@ class MainWindow(QMainWindow):
         self._action(file, "&Save", QKeySequence.StandardKey.Save, self.documents.save)
         self._action(file, "Save &as...", QKeySequence.StandardKey.SaveAs, self.documents.save_as)
         file.addSeparator()
+        export = file.addMenu("&Export")
+        self.export_actions = {
+            suffix: self._action(export, f"{label}...", None, lambda s=suffix: self.exporter.export(s))
+            for suffix, label in KINDS.items()
+        }
+        file.addSeparator()
         self._action(file, "&Quit", QKeySequence.StandardKey.Quit, self.close)
 
         edit = bar.addMenu("&Edit")
@@ -137,6 +169,21 @@ class MainWindow(QMainWindow):
         self._action(play, "Previous frame", Qt.Key.Key_Left, lambda: self.player.step(-1))
         self._action(play, "First frame", Qt.Key.Key_Home, lambda: self.player.go_to(0))
         self._action(play, "Last frame", Qt.Key.Key_End, lambda: self.player.go_to(-1))
+
+        pose = bar.addMenu("P&ose")
+        posing = self.posing
+        self._action(pose, "&Copy pose", "Ctrl+Shift+C", posing.copy)
+        self._action(pose, "&Paste pose", "Ctrl+Shift+V", posing.paste)
+        self._action(pose, "Paste &mirrored pose", "Ctrl+Shift+M", lambda: posing.paste(mirrored=True))
+        self._action(pose, "M&irror left/right", "Ctrl+M", posing.mirror)
+        self._action(pose, "Pose alternate as mirror of its &key", None, posing.mirror_of_key)
+        self._action(pose, "&Reset pose", None, lambda: posing.reset(joint_only=False))
+        pose.addSeparator()
+        self._action(pose, "Import pose from &CSV...", None, posing.import_csv)
+        self._action(pose, "Import pose from &BVH frame...", None, posing.import_bvh)
+        pose.addSeparator()
+        self._action(pose, "&Load rig from BVH...", None, posing.load_rig)
+        self._action(pose, "Use the &horse template", None, posing.use_template)
 
         tools = bar.addMenu("&Tools")
         tools.addActions(list(self.tools.tool_actions.values()))
@@ -191,7 +238,18 @@ class MainWindow(QMainWindow):
         frame_ok = state.source is None or self.frame_view.shown_frame == state.frame
         silhouettes = state.project.silhouettes
         analysis_ok = silhouettes is None or (state.analysis is not None and not self.analysis.running)
-        return frame_ok and analysis_ok and not self.runner.busy
+        return frame_ok and analysis_ok and not self.runner.busy and not self.animator.pending
+
+    def snapshot(self) -> QPixmap:
+        """The window as shown, with the 3D view (``grab()`` leaves native GL windows out)."""
+        pixmap = self.grab()
+        container = self.viewport.gl_container
+        if container is not None and container.isVisible():
+            painter = QPainter(pixmap)
+            rect = QRect(container.mapTo(self, QPoint(0, 0)), container.size())
+            painter.drawImage(rect, self.viewport.gl_view.render_image())
+            painter.end()
+        return pixmap
 
     # -- window --------------------------------------------------------------------------------
     def _show_message(self, message: str) -> None:

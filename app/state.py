@@ -7,6 +7,7 @@ every edit of the project goes through a command on :attr:`AppState.undo_stack`
 
 from __future__ import annotations
 
+from functools import lru_cache
 from pathlib import Path
 
 from PySide6.QtCore import QObject, Signal
@@ -15,6 +16,15 @@ from PySide6.QtGui import QUndoStack
 from gaitcore.frames import FrameSource
 from gaitcore.pipeline import Analysis
 from gaitcore.project import Project
+from gaitcore.skeleton import Skeleton, load_template
+
+DEFAULT_SKELETON = "horse"
+
+
+@lru_cache(maxsize=1)
+def default_skeleton() -> Skeleton:
+    """The bundled horse template, posed when the project names no rig of its own."""
+    return load_template(DEFAULT_SKELETON)
 
 
 class AppState(QObject):
@@ -39,6 +49,8 @@ class AppState(QObject):
     selectedKeyChanged(int)
         The selected key frame changed (-1: none): the key clicked in the PC plot, shown
         highlighted there and on the timeline.
+    selectedJointChanged(str)
+        The joint selected for posing changed ("" for none), in the 3D viewport or the list.
     """
 
     projectChanged = Signal(object)
@@ -49,6 +61,7 @@ class AppState(QObject):
     analysisChanged = Signal(object)
     analysisFailed = Signal(str)
     selectedKeyChanged = Signal(int)
+    selectedJointChanged = Signal(str)
 
     def __init__(self, parent: QObject | None = None) -> None:
         super().__init__(parent)
@@ -58,6 +71,7 @@ class AppState(QObject):
         self._frame = 0
         self._analysis: Analysis | None = None
         self._selected_key = -1
+        self._selected_joint = ""
         self.undo_stack = QUndoStack(self)
 
     # -- read ---------------------------------------------------------------------------
@@ -87,6 +101,15 @@ class AppState(QObject):
         return self._selected_key
 
     @property
+    def selected_joint(self) -> str:
+        return self._selected_joint
+
+    @property
+    def skeleton(self) -> Skeleton:
+        """The rig being posed: the project's, or the bundled horse template."""
+        return self._project.skeleton or default_skeleton()
+
+    @property
     def n_frames(self) -> int:
         """Frames of the clip: from the footage, else from the silhouettes, else 0."""
         if self._source is not None:
@@ -109,6 +132,7 @@ class AppState(QObject):
         self.analysisChanged.emit(None)
         self.projectOpened.emit(project)
         self.projectChanged.emit(project)
+        self.set_selected_joint("")
         self._frame = -1
         self.set_frame(0)
 
@@ -117,6 +141,8 @@ class AppState(QObject):
         if project is not self._project:
             self._project = project
             self.projectChanged.emit(project)
+            if self._selected_joint not in self.skeleton.joint_names:
+                self.set_selected_joint("")
 
     def set_path(self, path: Path | None) -> None:
         if path != self._path:
@@ -134,6 +160,13 @@ class AppState(QObject):
     def set_analysis(self, analysis: Analysis | None) -> None:
         self._analysis = analysis
         self.analysisChanged.emit(analysis)
+
+    def set_selected_joint(self, name: str) -> None:
+        """Select joint ``name`` of the skeleton for posing ("" or an unknown name: none)."""
+        name = name if name in self.skeleton.joint_names else ""
+        if name != self._selected_joint:
+            self._selected_joint = name
+            self.selectedJointChanged.emit(name)
 
     def set_selected_key(self, frame: int) -> None:
         if frame != self._selected_key:

@@ -208,6 +208,7 @@ def test_space_plays_and_arrows_step(qtbot, window, canter_clip):
     window.open_path(canter_clip / "images")
     wait_ready(qtbot, window)
     window.activateWindow()
+    qtbot.waitUntil(window.isActiveWindow)  # asynchronous on a real display (xcb)
     window.frame_view.setFocus()
     qtbot.keyClick(window.frame_view, Qt.Key.Key_Right)
     assert window.state.frame == 1

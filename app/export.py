@@ -1,0 +1,99 @@
+"""The Export menu: curves CSV, BVH, glTF and a preview video, through gaitcore.io.export.
+
+The animation is computed afresh from the project (:func:`app.animation.compute_animation`,
+with the preview's options), so what is written is exactly what ``gaitcore animate`` writes
+for the same analysis and key poses. Exporting before every key is posed says which frames
+are missing and writes nothing. Files are written off the GUI thread with progress + Cancel.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from PySide6.QtCore import QObject
+
+from app.animation import AnimationController, compute_animation
+from app.document import DocumentController, open_source
+from app.state import AppState
+from app.workers import Job
+from gaitcore.errors import GaitInputError
+from gaitcore.io.export import EXPORTERS, export_animation, write_preview_video
+from gaitcore.io.pose_table import PoseTable
+
+DEFAULT_FPS = 24.0
+VIDEO = ".mp4"
+KINDS = {".csv": "Curves CSV", ".bvh": "BVH", ".glb": "glTF (.glb)", VIDEO: "Preview video"}
+
+
+def export_fps(state: AppState) -> float:
+    """Frame rate of the clip: the footage's, the project's, else 24."""
+    source = state.source
+    return float((source.fps if source is not None else None) or state.project.fps or DEFAULT_FPS)
+
+
+class ExportController(QObject):
+    """Ask where, check that every key is posed, then write the file in a background job."""
+
+    def __init__(self, state: AppState, animation: AnimationController, documents: DocumentController,
+                 parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self._state = state
+        self._animation = animation
+        self._documents = documents
+
+    def export(self, suffix: str, path: Path | None = None) -> Job | None:
+        """Export to ``path`` (asked when None) as ``suffix`` (a key of :data:`KINDS`).
+
+        Returns the running job, or None when nothing is written (a message says why).
+        """
+        state, asker = self._state, self._documents.asker
+        title = f"Export {KINDS[suffix]}"
+        try:
+            animation = compute_animation(state.project, state.analysis, state.skeleton,
+                                          self._animation.options)
+        except GaitInputError as exc:
+            asker.error(title, f"{exc}; nothing was exported")
+            return None
+        if path is None:
+            base = state.path or state.project.footage or Path.cwd() / "untitled"
+            suggested = Path(base).with_name(Path(base).stem + "_animation" + suffix)
+            description = EXPORTERS[suffix].description if suffix in EXPORTERS else "MPEG-4 video (*.mp4)"
+            path = asker.export_path(title, suggested, description)
+            if path is None:
+                return None
+        frames, curves = animation.exported()
+        skeleton, fps = animation.skeleton, export_fps(state)
+        if suffix == VIDEO:
+            footage = self._footage_frames(animation)
+            job = Job(lambda progress: write_preview_video(path, footage, skeleton, curves, fps,
+                                                           progress=progress), title)
+        else:
+            table = PoseTable(frames, skeleton.channel_names, curves)
+            job = Job(lambda progress: export_animation(path, skeleton, table, fps), title)
+        return self._documents.run(job, lambda result: self._done(path, result))
+
+    def _footage_frames(self, animation):
+        """An iterator over the frames the exported poses go with, read on the job's thread."""
+        project = self._state.project
+        start = animation.cycle_start if animation.cycle is not None else 0
+        count = len(animation.exported()[0])
+
+        def frames():
+            source = open_source(project)
+            try:
+                for i in range(start, start + count):
+                    if source is not None:
+                        yield source.frame(i)
+                    else:  # a project of masks only: show the silhouettes
+                        yield np.asarray(project.silhouettes.roi.crops[i])
+            finally:
+                if source is not None:
+                    source.close()
+
+        return frames()
+
+    def _done(self, asked: Path, result) -> None:
+        written = getattr(result, "path", result) or asked
+        note = getattr(result, "note", None)
+        self._documents.messageRaised.emit(f"exported {written}" + (f" ({note})" if note else ""))

@@ -1,0 +1,52 @@
+"""Undoable pose edits: one QUndoCommand per change of a key pose or of the rig.
+
+Consecutive changes of one joint from its spin boxes merge into one step, and so does one
+drag in the 3D viewport, so that Undo takes back what the artist sees as one gesture.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable, Mapping
+from dataclasses import replace
+
+import numpy as np
+from PySide6.QtGui import QUndoCommand
+
+from app.commands import ProjectCommand
+from app.state import AppState
+from gaitcore.skeleton import Skeleton
+
+_POSE_ID = 1002
+
+
+class SetPoseCommand(ProjectCommand):
+    """Give ``frame`` the pose vector ``pose`` (None: remove its pose).
+
+    Parameters
+    ----------
+    merge_key : hashable, optional
+        Consecutive commands with the same key merge into one undo step (e.g.
+        ``("spin", frame, joint)`` or ``("drag", frame, joint, n)``); None never merges.
+    """
+
+    def __init__(self, state: AppState, frame: int, pose: np.ndarray | None, text: str,
+                 merge_key: Hashable | None = None) -> None:
+        super().__init__(state, state.project.with_pose(frame, pose), text, frame=frame)
+        self._merge_key = merge_key
+
+    def id(self) -> int:
+        return _POSE_ID if self._merge_key is not None else -1
+
+    def mergeWith(self, other: QUndoCommand) -> bool:
+        if not isinstance(other, SetPoseCommand) or other._merge_key != self._merge_key:
+            return False
+        self._after = other._after
+        return True
+
+
+class SetSkeletonCommand(ProjectCommand):
+    """Pose another rig (None: the horse template) with ``key_poses`` laid out for it."""
+
+    def __init__(self, state: AppState, skeleton: Skeleton | None,
+                 key_poses: Mapping[int, tuple[float, ...]], text: str) -> None:
+        super().__init__(state, replace(state.project, skeleton=skeleton, key_poses=key_poses), text)

@@ -1,0 +1,350 @@
+"""Posing the skeleton on the key-images: which frames, which pose, and every pose edit.
+
+The frames to pose are the analysis's key-images and, with "alternates (walk)" on, the
+alternates the artist accepted (paper Section 3.2), one per key. :class:`PosingController`
+turns the artist's actions (a spin box, a drag, copy/paste, mirror, reset, imports, a new rig)
+into commands of :mod:`app.pose_commands`; questions go to the :class:`~app.dialogs.Asker`.
+An import that fails changes nothing and says why.
+"""
+
+from __future__ import annotations
+
+from itertools import count
+from pathlib import Path
+
+import numpy as np
+from PySide6.QtCore import QObject, Signal
+
+from app.dialogs import Asker
+from app.pose_commands import SetPoseCommand, SetSkeletonCommand
+from app.state import AppState
+from gaitcore.errors import GaitInputError
+from gaitcore.io.bvh_reader import read_bvh, zxy_from_matrix
+from gaitcore.io.pose_table import read_pose_table
+from gaitcore.pipeline import Analysis
+from gaitcore.project import Project
+from gaitcore.skeleton import Skeleton, euler_zxy_matrix
+
+IGNORED_COLUMNS = ("time_s",)
+MAX_LISTED = 10
+CENTIMETRE_RIG_M = 10.0
+"""A BVH rig taller than this (in file units read as metres) is taken to be in centimetres."""
+
+
+def alternates_in_use(project: Project, analysis: Analysis | None) -> tuple[int, ...]:
+    """The accepted alternates when switching is on and they still pair with the keys."""
+    if analysis is None or not project.settings.switching:
+        return ()
+    keys, alts = analysis.key_frames, project.alternates
+    if len(alts) != len(keys) or set(alts) & set(keys):
+        return ()
+    return tuple(alts)
+
+
+def frames_to_pose(project: Project, analysis: Analysis | None) -> tuple[int, ...]:
+    """Key-images, then the alternates in use: every frame that needs a pose."""
+    if analysis is None:
+        return ()
+    return tuple(analysis.key_frames) + alternates_in_use(project, analysis)
+
+
+def missing_poses(project: Project, analysis: Analysis | None, n_channels: int) -> tuple[int, ...]:
+    """Frames to pose that have no pose (or one of another rig's length)."""
+    return tuple(f for f in frames_to_pose(project, analysis)
+                 if len(project.key_poses.get(f, ())) != n_channels)
+
+
+def _joints_of(channels: list[str]) -> str:
+    joints = list(dict.fromkeys(c.rsplit(".", 1)[0] for c in channels))
+    more = f" and {len(joints) - MAX_LISTED} more" if len(joints) > MAX_LISTED else ""
+    return ", ".join(joints[:MAX_LISTED]) + more
+
+
+def map_channels(columns: tuple[str, ...], values: np.ndarray, skeleton: Skeleton
+                 ) -> tuple[np.ndarray, list[str]]:
+    """A pose of ``skeleton`` from one row of named values, matched by channel name.
+
+    Returns
+    -------
+    pose : ndarray of shape (k,)
+    ignored : list of str
+        Columns that are not channels of the skeleton.
+
+    Raises
+    ------
+    GaitInputError
+        Channels of the skeleton without a column; the message names their joints.
+    """
+    index = {c: i for i, c in enumerate(columns)}
+    missing = [c for c in skeleton.channel_names if c not in index]
+    if missing:
+        raise GaitInputError(
+            f"it lacks {len(missing)} of the {skeleton.n_channels} channels of the rig "
+            f"{skeleton.name!r}, on joints {_joints_of(missing)}; nothing was changed")
+    pose = np.array([values[index[c]] for c in skeleton.channel_names], dtype=float)
+    ignored = [c for c in columns if c not in skeleton.channel_names and c not in IGNORED_COLUMNS]
+    return pose, ignored
+
+
+class PosingController(QObject):
+    """The artist's pose edits on the current frame, as undoable commands.
+
+    Signals
+    -------
+    messageRaised(str)
+        A line for the status bar.
+    """
+
+    messageRaised = Signal(str)
+
+    def __init__(self, state: AppState, asker: Asker, parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self._state = state
+        self.asker = asker
+        self._clipboard: np.ndarray | None = None
+        self._drags = count()
+        self._drag_id = 0
+
+    # -- queries -----------------------------------------------------------------------------
+    def frames(self) -> tuple[int, ...]:
+        return frames_to_pose(self._state.project, self._state.analysis)
+
+    def alternates(self) -> tuple[int, ...]:
+        return alternates_in_use(self._state.project, self._state.analysis)
+
+    def missing(self) -> tuple[int, ...]:
+        return missing_poses(self._state.project, self._state.analysis, self._state.skeleton.n_channels)
+
+    def editable_frame(self) -> int | None:
+        """The current frame when it is a frame to pose, else None."""
+        frame = self._state.frame
+        return frame if frame in self.frames() else None
+
+    def pose_of(self, frame: int) -> np.ndarray:
+        """The stored pose of ``frame``, or the rest pose when it has none (yet)."""
+        skeleton = self._state.skeleton
+        pose = self._state.project.key_poses.get(frame)
+        if pose is None or len(pose) != skeleton.n_channels:
+            return skeleton.rest_pose()
+        return np.array(pose, dtype=float)
+
+    def has_clipboard(self) -> bool:
+        return self._clipboard is not None and len(self._clipboard) == self._state.skeleton.n_channels
+
+    # -- edits -------------------------------------------------------------------------------
+    def set_channel(self, channel: str, value: float) -> None:
+        """Set one channel of the current key's pose (consecutive changes of a joint merge)."""
+        frame = self._require_frame()
+        if frame is None:
+            return
+        skeleton = self._state.skeleton
+        i = skeleton.channel_index(channel)
+        pose = self.pose_of(frame)
+        pose[i] = float(np.clip(value, *skeleton.limits_array()[i]))
+        joint = channel.rsplit(".", 1)[0]
+        self._push(frame, pose, f"pose {joint} on frame {frame}", ("spin", frame, joint))
+
+    def begin_drag(self) -> None:
+        """Start a new viewport drag: its changes merge into one undo step."""
+        self._drag_id = next(self._drags)
+
+    def rotate_joint(self, joint: int, base_pose: np.ndarray, axis: np.ndarray, angle_deg: float) -> None:
+        """Set the current key's pose to ``base_pose`` with ``joint`` turned about world ``axis``.
+
+        The turned local rotation is decomposed as R = Rz Rx Ry; channels the joint lacks are
+        dropped and the others clamped to its limits.
+        """
+        frame = self._require_frame()
+        skeleton = self._state.skeleton
+        chans = [f"{skeleton.joints[joint].name}.{c}" for c in ("rz", "rx", "ry")]
+        have = [c for c in chans if c in skeleton.channel_names]
+        if frame is None or not have:
+            return
+        world = skeleton.forward_kinematics(base_pose)
+        parent = skeleton.parents[joint]
+        parent_rot = np.eye(3) if parent < 0 else world[parent, :3, :3]
+        a = np.asarray(axis, float) / np.linalg.norm(axis)
+        t = np.radians(angle_deg)
+        k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+        turn = np.eye(3) + np.sin(t) * k + (1 - np.cos(t)) * k @ k
+        old = [base_pose[skeleton.channel_index(c)] if c in have else 0.0 for c in chans]
+        local = euler_zxy_matrix(np.array(old))
+        new = zxy_from_matrix(parent_rot.T @ turn @ parent_rot @ local)
+        pose = np.array(base_pose, dtype=float)
+        limits = skeleton.limits_array()
+        for c, v in zip(chans, new):
+            if c in have:
+                i = skeleton.channel_index(c)
+                pose[i] = float(np.clip(v, *limits[i]))
+        name = skeleton.joints[joint].name
+        self._push(frame, pose, f"rotate {name} on frame {frame}", ("drag", frame, name, self._drag_id))
+
+    def set_pose(self, pose: np.ndarray, text: str) -> bool:
+        """Replace the current key's whole pose (clamped to the joint limits)."""
+        frame = self._require_frame()
+        if frame is None:
+            return False
+        clamped = np.clip(pose, *self._state.skeleton.limits_array().T)
+        n = int(np.count_nonzero(clamped != pose))
+        self._push(frame, clamped, f"{text} on frame {frame}")
+        if n:
+            self.messageRaised.emit(f"{n} channel(s) clamped to the joint limits of the rig")
+        return True
+
+    def copy(self) -> None:
+        frame = self._require_frame()
+        if frame is not None:
+            self._clipboard = self.pose_of(frame)
+            self.messageRaised.emit(f"copied the pose of frame {frame}")
+
+    def paste(self, *, mirrored: bool = False) -> None:
+        if not self.has_clipboard():
+            self.messageRaised.emit("nothing to paste: copy the pose of a key first")
+            return
+        pose = self._state.skeleton.mirror_pose(self._clipboard) if mirrored else self._clipboard
+        self.set_pose(pose, "paste mirrored pose" if mirrored else "paste pose")
+
+    def mirror(self) -> None:
+        """Swap left and right of the current key's pose (gaitcore's mirror_pose)."""
+        frame = self._require_frame()
+        if frame is not None:
+            self.set_pose(self._state.skeleton.mirror_pose(self.pose_of(frame)), "mirror pose")
+
+    def mirror_of_key(self) -> None:
+        """Pose an alternate as the mirror of the key it pairs with (a walk's other half)."""
+        frame = self._require_frame()
+        alts = self.alternates()
+        if frame is None or frame not in alts:
+            self.messageRaised.emit("go to an alternate frame to copy the mirrored pose of its key")
+            return
+        key = self._state.analysis.key_frames[alts.index(frame)]
+        self.set_pose(self._state.skeleton.mirror_pose(self.pose_of(key)), f"mirror key {key}")
+
+    def reset(self, *, joint_only: bool) -> None:
+        """Put the selected joint (or the whole pose) back to rest."""
+        frame = self._require_frame()
+        if frame is None:
+            return
+        skeleton, joint = self._state.skeleton, self._state.selected_joint
+        pose = self.pose_of(frame)
+        if joint_only:
+            if not joint:
+                self.messageRaised.emit("select a joint to reset")
+                return
+            for i, c in enumerate(skeleton.channel_names):
+                if c.rsplit(".", 1)[0] == joint:
+                    pose[i] = 0.0
+            self._push(frame, pose, f"reset {joint} on frame {frame}")
+        else:
+            self._push(frame, skeleton.rest_pose(), f"reset pose on frame {frame}")
+
+    # -- imports and rigs --------------------------------------------------------------------
+    def import_csv(self, path: Path | None = None) -> bool:
+        """Pose the current key from a row of a pose CSV (channels matched by name)."""
+        if self._require_frame() is None:
+            return False
+        path = path or self.asker.open_file("Import a pose from CSV", "Pose tables (*.csv)")
+        if path is None:
+            return False
+        try:
+            table = read_pose_table(path)
+            frames = [int(f) for f in table.frames]
+            if not frames:
+                raise GaitInputError("it has no rows")
+            row = frames.index(self._state.frame) if self._state.frame in frames else (
+                0 if len(frames) == 1 else self._choose_row(frames))
+            if row is None:
+                return False
+            pose, ignored = map_channels(table.columns, table.values[row], self._state.skeleton)
+        except GaitInputError as exc:
+            self.asker.error("Cannot import the pose", f"{Path(path).name}: {exc}")
+            return False
+        return self._apply_import(pose, ignored, f"import pose from {Path(path).name} (frame {frames[row]})")
+
+    def import_bvh(self, path: Path | None = None) -> bool:
+        """Pose the current key from one frame of a BVH file (joints matched by name)."""
+        if self._require_frame() is None:
+            return False
+        path = path or self.asker.open_file("Import a pose from a BVH frame", "BVH motion (*.bvh)")
+        if path is None:
+            return False
+        try:
+            _, table, _ = read_bvh(path)
+            n = len(table.frames)
+            if n == 0:
+                raise GaitInputError("it has no motion frames")
+            row = 0 if n == 1 else self.asker.choose_frame(f"Frame of {Path(path).name}", list(range(n)))
+            if row is None:
+                return False
+            pose, ignored = map_channels(table.columns, table.values[row], self._state.skeleton)
+        except GaitInputError as exc:
+            self.asker.error("Cannot import the pose", f"{Path(path).name}: {exc}")
+            return False
+        return self._apply_import(pose, ignored, f"import pose from {Path(path).name} (frame {row})")
+
+    def load_rig(self, path: Path | None = None) -> bool:
+        """Replace the skeleton by the rig of a BVH file; poses are dropped unless the channels
+        are the same (the artist is asked first)."""
+        path = path or self.asker.open_file("Load rig from BVH", "BVH motion (*.bvh)")
+        if path is None:
+            return False
+        try:
+            skeleton, _, _ = read_bvh(path)
+            rest = skeleton.joint_positions(skeleton.rest_pose())
+            if np.ptp(rest[:, 1]) > CENTIMETRE_RIG_M:
+                skeleton, _, _ = read_bvh(path, scale=0.01)
+                self.messageRaised.emit(f"{Path(path).name}: read in centimetres")
+        except GaitInputError as exc:
+            self.asker.error("Cannot load the rig", str(exc))
+            return False
+        return self._replace_skeleton(skeleton, f"load rig {skeleton.name}")
+
+    def use_template(self) -> bool:
+        """Go back to the bundled horse template."""
+        return self._replace_skeleton(None, "use the horse template")
+
+    def _replace_skeleton(self, skeleton: Skeleton | None, text: str) -> bool:
+        from app.state import default_skeleton
+
+        project, old = self._state.project, self._state.skeleton
+        new = skeleton or default_skeleton()
+        keep = set(new.channel_names) == set(old.channel_names)
+        posed = len(project.key_poses)
+        if posed and not keep and not self.asker.confirm(
+                "Replace the rig?",
+                f"The channels of {new.name!r} differ from those of the rig being posed: the "
+                f"{posed} pose(s) made so far will be dropped (Undo brings them back). Continue?"):
+            return False
+        poses = {}
+        if keep:  # same channels, maybe in another order: carry every pose over by name
+            order = [old.channel_index(c) for c in new.channel_names]
+            poses = {f: tuple(np.asarray(p)[order]) for f, p in project.key_poses.items()
+                     if len(p) == old.n_channels}
+        self._state.undo_stack.push(SetSkeletonCommand(self._state, skeleton, poses, text))
+        self._state.set_selected_joint("")
+        return True
+
+    # -- helpers -----------------------------------------------------------------------------
+    def _choose_row(self, frames: list[int]) -> int | None:
+        chosen = self.asker.choose_frame("Which row of the pose table?", frames)
+        return None if chosen is None else frames.index(chosen)
+
+    def _apply_import(self, pose: np.ndarray, ignored: list[str], text: str) -> bool:
+        if not self.set_pose(pose, text):
+            return False
+        if ignored:
+            self.messageRaised.emit(f"imported; ignored {len(ignored)} channel(s) the rig does not "
+                                    f"have, on {_joints_of(ignored)}")
+        return True
+
+    def _require_frame(self) -> int | None:
+        frame = self.editable_frame()
+        if frame is None:
+            frames = self.frames()
+            self.messageRaised.emit(
+                f"frame {self._state.frame} is not a key-image: go to one of {list(frames)} to pose it"
+                if frames else "no key-images yet: analyse the clip first")
+        return frame
+
+    def _push(self, frame: int, pose: np.ndarray, text: str, merge_key=None) -> None:
+        self._state.undo_stack.push(SetPoseCommand(self._state, frame, pose, text, merge_key))

@@ -1,0 +1,212 @@
+"""The 3D pose viewport: the skeleton over the current frame, to pose keys and watch the result.
+
+On a frame to pose (a key-image or an accepted alternate) it shows that frame's pose, and
+clicking a joint selects it, dragging from it rotates it about the view axis (one undo step
+per drag). On any other frame it shows the animation predicted for that frame, so playback
+moves the skeleton in step with the footage, which is drawn on a plane behind it. Side, front
+and top buttons reset the camera; orbit, pan and zoom are pyqtgraph's.
+
+Without OpenGL (Qt's offscreen platform) the viewport says so and everything else works: the
+posing panel needs no GL.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtCore import Qt, QTimer
+from PySide6.QtWidgets import QCheckBox, QHBoxLayout, QLabel, QToolButton, QVBoxLayout, QWidget
+
+from app.animation import AnimationController
+from app.posing import PosingController
+from app.state import AppState
+from app.widgets.reference_plane import (
+    SkeletonExtent, reference_image, silhouette_height_px, skeleton_extent,
+)
+from app.widgets.skeleton_gl import SkeletonGLView, opengl_available
+from app.workers import FrameLoader
+from gaitcore.project import Silhouettes
+from gaitcore.skeleton import Skeleton
+
+VIEW_MARGIN = 1.35
+FOOTAGE_WAIT_MS = 100
+"""How long a new pose waits for its footage frame, so that both are drawn in one repaint."""
+
+
+class PoseViewport(QWidget):
+    """3D view of the skeleton bound to the state, the posing and the animation."""
+
+    def __init__(self, state: AppState, loader: FrameLoader, posing: PosingController,
+                 animation: AnimationController, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self._state = state
+        self._posing = posing
+        self._animation = animation
+        self._skeleton: Skeleton | None = None
+        self._extent: SkeletonExtent | None = None
+        self._sil: tuple[Silhouettes | None, float | None] = (None, None)
+        self._image: tuple[int, np.ndarray] | None = None
+        self._base_pose: np.ndarray | None = None
+        self.shown_kind = ""
+        self._view_name = "side"
+        self._rest_root_x = 0.0
+        self._dx = 0.0
+        self._ref = None
+        self._fallback = QTimer(self, singleShot=True, interval=FOOTAGE_WAIT_MS)
+        self._fallback.timeout.connect(self._draw_pose)
+        self.shown_pose: np.ndarray | None = None
+
+        self.info = QLabel()
+        self.info.setWordWrap(True)
+        self.setMinimumSize(260, 200)
+        self.footage = QCheckBox("Footage")
+        self.footage.setChecked(True)
+        self.flip = QCheckBox("Flip")
+        self.flip.setToolTip("Mirror the footage left-right (animal moving to the left)")
+        bar = QHBoxLayout()
+        self.view_buttons = {}
+        for name in ("side", "front", "top"):
+            button = QToolButton()
+            button.setText(name.capitalize())
+            button.setToolTip(f"Look at the skeleton from the {name}")
+            button.clicked.connect(lambda _c=False, n=name: self.set_view(n))
+            bar.addWidget(button)
+            self.view_buttons[name] = button
+        bar.addWidget(self.footage)
+        bar.addWidget(self.flip)
+        bar.addStretch(1)
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(2, 2, 2, 2)
+        layout.addLayout(bar)
+        self.gl_view: SkeletonGLView | None = None
+        self.gl_container: QWidget | None = None
+        if opengl_available():
+            self.gl_view = SkeletonGLView()
+            self.gl_container = QWidget.createWindowContainer(self.gl_view, self)
+            self.gl_container.setFocusPolicy(Qt.FocusPolicy.ClickFocus)
+            layout.addWidget(self.gl_container, 1)
+            self.gl_view.jointPressed.connect(self._on_joint_pressed)
+            self.gl_view.jointDragged.connect(self._on_joint_dragged)
+        else:
+            note = QLabel("The 3D viewport needs OpenGL, which this display does not offer.\n"
+                          "Pose with the Posing panel; everything else works.")
+            note.setAlignment(Qt.AlignmentFlag.AlignCenter)
+            note.setWordWrap(True)
+            layout.addWidget(note, 1)
+        layout.addWidget(self.info)
+
+        loader.frameLoaded.connect(self._on_frame_loaded)
+        state.frameChanged.connect(self.refresh)
+        state.projectChanged.connect(self.refresh)
+        state.analysisChanged.connect(self.refresh)
+        state.sourceChanged.connect(self._forget_image)
+        state.selectedJointChanged.connect(self._show_selected)
+        animation.animationChanged.connect(self.refresh)
+        self.footage.toggled.connect(self._update_reference)
+        self.flip.toggled.connect(self._update_reference)
+        self.refresh()
+
+    # -- camera ------------------------------------------------------------------------------
+    def set_view(self, name: str) -> None:
+        """Look from the side, front or top at the whole skeleton."""
+        if self.gl_view is not None and self._extent is not None:
+            e = self._extent
+            width = e.length_m if name in ("side", "top") else 2 * e.depth_m
+            height = 2 * e.depth_m if name == "top" else e.height_m
+            along = {"side": 2 * e.depth_m, "top": e.height_m}.get(name, e.length_m)
+            self._view_name = name
+            self.gl_view.set_view(name, e.box_center_xy,
+                                  (width * VIEW_MARGIN, height * VIEW_MARGIN, along))
+
+    # -- state -> view -----------------------------------------------------------------------
+    def refresh(self, *_changed) -> None:
+        """Show the pose of the current frame (key pose, prediction or rest) and the footage."""
+        skeleton = self._state.skeleton
+        if skeleton is not self._skeleton:
+            self._skeleton = skeleton
+            self._extent = skeleton_extent(skeleton)
+            self._rest_root_x = float(skeleton.offsets[0, 0])
+            if self.gl_view is not None:
+                self.gl_view.set_skeleton(skeleton)
+                self.set_view("side")
+            self._show_selected(self._state.selected_joint)
+            self._update_reference()
+        frame = self._state.frame
+        if frame in self._posing.frames():
+            pose = self._posing.pose_of(frame)
+            posed = frame not in self._posing.missing()
+            role = "alternate" if frame in self._posing.alternates() else "key"
+            self.shown_kind = role if posed else f"{role} (not posed yet)"
+            text = f"frame {frame}: {self.shown_kind}, click a joint and drag to rotate it"
+        elif self._animation.animation is not None:
+            pose = self._animation.animation.pose_at(frame)
+            self.shown_kind = "predicted"
+            text = f"frame {frame}: predicted pose"
+        else:
+            pose = skeleton.rest_pose()
+            self.shown_kind = "rest"
+            text = f"frame {frame}: rest pose ({self._animation.status or 'no animation yet'})"
+        self.shown_pose = pose
+        self.info.setText(text)
+        waiting = (self._state.source is not None and self.footage.isChecked()
+                   and (self._image is None or self._image[0] != frame))
+        if waiting:  # draw pose and footage together, once the loader delivers the frame
+            self._fallback.start()
+        else:
+            self._draw_pose()
+
+    def _draw_pose(self) -> None:
+        self._fallback.stop()
+        if self.gl_view is None or self.shown_pose is None:
+            return
+        self.gl_view.set_pose(self.shown_pose)
+        # The footage is tracked (the animal stays in its window): follow the root along X.
+        self._dx = float(self.gl_view.joint_positions()[0, 0]) - self._rest_root_x
+        self.gl_view.follow_x(self._dx)
+        if self._ref is not None:
+            self.gl_view.place_reference(self._shifted(self._ref.transform))
+
+    def _show_selected(self, name: str) -> None:
+        if self.gl_view is not None and self._skeleton is not None:
+            names = self._skeleton.joint_names
+            self.gl_view.set_selected(names.index(name) if name in names else -1)
+
+    def _forget_image(self, *_changed) -> None:
+        self._image = None
+        self._update_reference()
+
+    def _on_frame_loaded(self, index: int, image: np.ndarray) -> None:
+        self._image = (index, image)  # as the frame view: the loader decodes the newest only
+        self._draw_pose()
+        self._update_reference()
+
+    def _update_reference(self, *_changed) -> None:
+        if self.gl_view is None:
+            return
+        if not self.footage.isChecked() or self._image is None or self._extent is None:
+            self._ref = None
+            self.gl_view.set_reference(None)
+            return
+        silhouettes = self._state.project.silhouettes
+        if silhouettes is not self._sil[0]:
+            self._sil = (silhouettes, None if silhouettes is None else silhouette_height_px(silhouettes))
+        index, bgr = self._image
+        ref = reference_image(bgr, index, self._extent, silhouettes, flip=self.flip.isChecked(),
+                              height_px=self._sil[1])
+        self._ref = ref
+        self.gl_view.set_reference(ref.rgba_xy, self._shifted(ref.transform))
+
+    def _shifted(self, transform: np.ndarray) -> np.ndarray:
+        shift = np.eye(4)
+        shift[0, 3] = self._dx
+        return shift @ transform
+
+    # -- view -> edits -----------------------------------------------------------------------
+    def _on_joint_pressed(self, joint: int) -> None:
+        self._state.set_selected_joint(self._state.skeleton.joint_names[joint])
+        frame = self._posing.editable_frame()
+        self._base_pose = None if frame is None else self._posing.pose_of(frame)
+        self._posing.begin_drag()
+
+    def _on_joint_dragged(self, joint: int, angle_deg: float) -> None:
+        if self._base_pose is not None and self.gl_view is not None:
+            self._posing.rotate_joint(joint, self._base_pose, self.gl_view.view_axis(), angle_deg)

@@ -1,0 +1,156 @@
+"""Where the key-image goes in the 3D viewport so that the animal roughly overlaps the skeleton.
+
+The footage is a plane in gaitcore's XY plane, behind the skeleton (negative Z, away from the
+side camera). Its scale makes the median height of the tracked silhouettes equal to the
+skeleton's rest height, and the silhouette's centre of mass in the shown frame (the ROI
+centre, paper Section 2.2) lands on the skeleton's centre (area-weighted centre of its bone
+ellipsoids seen from the side). Only the part of the frame around the subject is uploaded,
+shrunk to at most :data:`MAX_TEXTURE_SIDE` pixels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from gaitcore.project import Silhouettes
+from gaitcore.skeleton import Skeleton
+
+MAX_TEXTURE_SIDE = 512
+CONTEXT = 1.6
+"""The uploaded crop is the ROI window grown by this factor (clipped to the frame)."""
+PLANE_GAP_M = 0.25
+WASH_OUT = 0.4
+"""Share of white mixed into the footage, so the skeleton stands out in front of it."""
+FALLBACK_HEIGHT_SHARE = 0.6
+"""Without silhouettes, the skeleton is assumed to fill this share of the frame height."""
+
+
+@dataclass(frozen=True)
+class SkeletonExtent:
+    """Side-view size of a skeleton at rest, metres (gaitcore frame)."""
+
+    center_xy: tuple[float, float]
+    height_m: float
+    depth_m: float
+    """Half its extent along Z (towards the side camera)."""
+    length_m: float
+    """Its extent along X (the direction of travel)."""
+    box_center_xy: tuple[float, float]
+    """Centre of its side-view bounding box (where cameras look)."""
+
+
+def skeleton_extent(skeleton: Skeleton) -> SkeletonExtent:
+    """Area-weighted centre and height of the bone ellipsoids of ``skeleton`` at rest."""
+    world = skeleton.forward_kinematics(skeleton.rest_pose())
+    bones = skeleton.bone_ellipsoids()
+    if not bones:
+        pos = world[:, :3, 3]
+        lo, hi = pos.min(axis=0), pos.max(axis=0)
+        return SkeletonExtent(((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2),
+                              float(max(hi[1] - lo[1], 0.5)), float(max(hi[2], -lo[2], 0.1)),
+                              float(max(hi[0] - lo[0], 0.5)),
+                              ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2))
+    centres, extents, areas = [], [], []
+    for b in bones:
+        rot = world[b.joint, :3, :3]
+        centres.append(rot @ b.center + world[b.joint, :3, 3])
+        semi = rot @ (b.axes * b.radii)  # world semi-axes as columns
+        extents.append(np.sqrt((semi ** 2).sum(axis=1)))
+        areas.append(b.radii[0] * b.radii[1])
+    c, e, a = np.array(centres), np.array(extents), np.array(areas)
+    centre = (a[:, None] * c).sum(axis=0) / a.sum()
+    top, bottom = (c[:, 1] + e[:, 1]).max(), (c[:, 1] - e[:, 1]).min()
+    depth = float(np.abs(np.r_[c[:, 2] + e[:, 2], c[:, 2] - e[:, 2]]).max())
+    left, right = (c[:, 0] - e[:, 0]).min(), (c[:, 0] + e[:, 0]).max()
+    return SkeletonExtent((float(centre[0]), float(centre[1])), float(top - bottom), depth,
+                          float(right - left), (float(left + right) / 2, float(top + bottom) / 2))
+
+
+def silhouette_height_px(silhouettes: Silhouettes) -> float | None:
+    """Median height of the tracked silhouettes in source pixels (None: none found)."""
+    roi = silhouettes.roi
+    rows = roi.crops.any(axis=2)
+    heights = [np.ptp(np.nonzero(r)[0]) + 1 for r, lost in zip(rows, roi.lost)
+               if not lost and r.any()]
+    return float(np.median(heights)) / roi.scale if heights else None
+
+
+@dataclass(frozen=True)
+class ReferenceImage:
+    """A texture for ``GLImageItem`` and its placement.
+
+    Attributes
+    ----------
+    rgba_xy : ndarray of shape (w, h, 4), uint8
+        Indexed (x, y) with y up, as GLImageItem wants it.
+    transform : ndarray of shape (4, 4)
+        Texel -> gaitcore world (metres).
+    """
+
+    rgba_xy: np.ndarray
+    transform: np.ndarray
+
+
+def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
+                    silhouettes: Silhouettes | None, *, flip: bool = False,
+                    height_px: float | None = None) -> ReferenceImage:
+    """Crop, shrink and place footage frame ``bgr`` (source pixels) behind the skeleton.
+
+    Parameters
+    ----------
+    bgr : ndarray of shape (H, W, 3) or (H, W)
+    frame : int
+        Clip frame of ``bgr`` (its silhouette gives the anchor).
+    skeleton : SkeletonExtent
+    silhouettes : Silhouettes or None
+    flip : bool
+        Mirror the footage left-right (for an animal moving towards -X in the clip).
+    height_px : float, optional
+        :func:`silhouette_height_px` of ``silhouettes``, when already computed.
+    """
+    img = np.asarray(bgr)
+    if img.dtype == bool:
+        img = img.astype(np.uint8) * 255
+    if img.ndim == 2:
+        img = cv2.cvtColor(img.astype(np.uint8), cv2.COLOR_GRAY2BGR)
+    rows, cols = img.shape[:2]
+    window = silhouettes.window_xywh(frame) if silhouettes is not None and frame < silhouettes.n_frames else None
+    if height_px is None and silhouettes is not None:
+        height_px = silhouette_height_px(silhouettes)
+    if window is not None and height_px:
+        u0, v0 = (float(v) for v in silhouettes.roi.centers_xy[frame])
+        metres_per_px = skeleton.height_m / height_px
+        x, y, w, h = window
+        cx, cy, w, h = x + w / 2, y + h / 2, w * CONTEXT, h * CONTEXT
+        x0, x1 = int(max(0, cx - w / 2)), int(min(cols, cx + w / 2))
+        y0, y1 = int(max(0, cy - h / 2)), int(min(rows, cy + h / 2))
+    else:
+        u0, v0 = cols / 2, rows / 2
+        metres_per_px = skeleton.height_m / (FALLBACK_HEIGHT_SHARE * rows)
+        x0, x1, y0, y1 = 0, cols, 0, rows
+    if x1 - x0 < 2 or y1 - y0 < 2:
+        x0, x1, y0, y1 = 0, cols, 0, rows
+    crop = img[y0:y1, x0:x1]
+    texel_px = max(1.0, max(crop.shape[:2]) / MAX_TEXTURE_SIDE)
+    if texel_px > 1.0:
+        size = (max(2, round(crop.shape[1] / texel_px)), max(2, round(crop.shape[0] / texel_px)))
+        crop = cv2.resize(crop, size, interpolation=cv2.INTER_AREA)
+        texel_px = (x1 - x0) / size[0]
+    rgba = np.empty(crop.shape[:2] + (4,), np.uint8)
+    rgba[..., :3] = crop[..., ::-1] * (1 - WASH_OUT) + 255 * WASH_OUT
+    rgba[..., 3] = 255
+    data = np.ascontiguousarray(rgba[::-1].transpose(1, 0, 2))
+    sign = -1.0 if flip else 1.0
+    s, t = metres_per_px, texel_px
+    tex_h = crop.shape[0]
+    X0, Y0 = skeleton.center_xy
+    transform = np.array([
+        [sign * t * s, 0, 0, X0 + sign * (x0 - u0) * s],
+        [0, t * s, 0, Y0 - (y0 + tex_h * t - v0) * s],
+        [0, 0, 1, -(skeleton.depth_m + PLANE_GAP_M)],
+        [0, 0, 0, 1.0],
+    ])
+    return ReferenceImage(data, transform)
