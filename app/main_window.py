@@ -81,7 +81,8 @@ class MainWindow(QMainWindow):
         self.pc_plot = PCPlotWidget(self.state)
         self.diagnosis = DiagnosisPanel(self.state)
         self.eigen = EigenImagesView(self.state)
-        self.viewport = PoseViewport(self.state, self.loader, self.posing, self.animator)
+        self.viewport = PoseViewport(self.state, self.loader, self.posing, self.animator,
+                                     is_playing=lambda: self.player.playing)
         self.views = QSplitter(Qt.Orientation.Horizontal)  # footage and skeleton side by side
         self.views.addWidget(self.frame_view)
         self.views.addWidget(self.viewport)

@@ -12,6 +12,8 @@ posing panel needs no GL.
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 from PySide6.QtCore import Qt, QTimer
 from PySide6.QtWidgets import QCheckBox, QHBoxLayout, QLabel, QToolButton, QVBoxLayout, QWidget
@@ -31,12 +33,18 @@ VIEW_MARGIN = 1.35
 FOOTAGE_WAIT_MS = 100
 """How long a new pose waits for its footage frame, so that both are drawn in one repaint."""
 
+SCRUB_SETTLE_MS = 60
+"""Outside playback, the 3D view follows a new frame once no newer one has come for this
+long: while the artist scrubs, the software-rendered 3D view (about 20 ms a frame on two
+cores) would otherwise hold up every frame of the footage, PC plot and timeline."""
+
 
 class PoseViewport(QWidget):
     """3D view of the skeleton bound to the state, the posing and the animation."""
 
     def __init__(self, state: AppState, loader: FrameLoader, posing: PosingController,
-                 animation: AnimationController, parent: QWidget | None = None) -> None:
+                 animation: AnimationController, parent: QWidget | None = None, *,
+                 is_playing: Callable[[], bool] = lambda: False) -> None:
         super().__init__(parent)
         self._state = state
         self._posing = posing
@@ -53,6 +61,10 @@ class PoseViewport(QWidget):
         self._ref = None
         self._fallback = QTimer(self, singleShot=True, interval=FOOTAGE_WAIT_MS)
         self._fallback.timeout.connect(self._draw_pose)
+        # Latest frame wins: frames arriving before the timer fires replace each other.
+        self._frame_timer = QTimer(self, singleShot=True)
+        self._frame_timer.timeout.connect(self._apply_frame)
+        self.is_playing = is_playing
         self.shown_pose: np.ndarray | None = None
 
         self.info = QLabel()
@@ -150,7 +162,7 @@ class PoseViewport(QWidget):
         waiting = (self._state.source is not None and self.footage.isChecked()
                    and (self._image is None or self._image[0] != frame))
         if waiting:  # draw pose and footage together, once the loader delivers the frame
-            self._fallback.start()
+            self._fallback.start(FOOTAGE_WAIT_MS + (0 if self.is_playing() else SCRUB_SETTLE_MS))
         else:
             self._draw_pose()
 
@@ -176,6 +188,10 @@ class PoseViewport(QWidget):
 
     def _on_frame_loaded(self, index: int, image: np.ndarray) -> None:
         self._image = (index, image)  # as the frame view: the loader decodes the newest only
+        self._fallback.stop()
+        self._frame_timer.start(0 if self.is_playing() else SCRUB_SETTLE_MS)
+
+    def _apply_frame(self) -> None:
         self._draw_pose()
         self._update_reference()
 
