@@ -35,9 +35,15 @@ BURST = 20
 
 def run() -> list[Section]:
     """All sections of this benchmark."""
-    from PySide6.QtCore import QCoreApplication
+    from PySide6.QtCore import QCoreApplication, QEvent
     from PySide6.QtWidgets import QApplication
 
+    from app.widgets.skeleton_gl import share_gl_resources
+
+    if os.environ["PYOPENGL_PLATFORM"] == "egl":  # as app.main: the 3D viewport needs both
+        os.environ.setdefault("QT_XCB_GL_INTEGRATION", "xcb_egl")
+    if QApplication.instance() is None:
+        share_gl_resources()
     app = QApplication.instance() or QApplication([])
     QCoreApplication.setOrganizationName("GaitStudio")
     QCoreApplication.setApplicationName("Gait Studio")
@@ -58,7 +64,8 @@ def run() -> list[Section]:
         finally:
             window.close()
             window.deleteLater()
-            app.processEvents()  # benchmark teardown only: let deleteLater run
+            # Delete it now: a GL view left to interpreter exit crashes the process.
+            QCoreApplication.sendPostedEvents(None, QEvent.Type.DeferredDelete)
 
 
 def scrub_latency(app, window, folder: Path) -> Section:
