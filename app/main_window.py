@@ -100,9 +100,9 @@ class MainWindow(QMainWindow):
             "eigen": self._dock("Eigen-images", self.eigen, Qt.DockWidgetArea.LeftDockWidgetArea),
         }
         self.splitDockWidget(self.docks["timeline"], self.docks["animation"], Qt.Orientation.Vertical)
-        self.tabifyDockWidget(self.docks["pcs"], self.docks["diagnosis"])
+        # The loop and the verdict are read together: one above the other, never tabbed.
+        self.splitDockWidget(self.docks["pcs"], self.docks["diagnosis"], Qt.Orientation.Vertical)
         self.tabifyDockWidget(self.docks["posing"], self.docks["eigen"])
-        self.docks["pcs"].raise_()
         self.docks["posing"].raise_()
         self.tools = ToolsController(self.state, self.frame_view, self.documents, self)
         self.addToolBar(self.tools.toolbar)
@@ -119,6 +119,7 @@ class MainWindow(QMainWindow):
         self.resizeDocks([self.docks["posing"], self.docks["pcs"]], [300, 380], Qt.Orientation.Horizontal)
         self.views.setSizes([500, 500])
         self.resizeDocks([self.docks["timeline"], self.docks["animation"]], [70, 170], Qt.Orientation.Vertical)
+        self.resizeDocks([self.docks["pcs"], self.docks["diagnosis"]], [360, 300], Qt.Orientation.Vertical)
         if remember_layout:
             self._restore_layout()
         self._update_title()
