@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from itertools import count
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 from PySide6.QtCore import QObject, Signal
@@ -20,7 +21,7 @@ from app.pose_commands import SetPoseCommand, SetSkeletonCommand
 from app.state import AppState
 from gaitcore.errors import GaitInputError
 from gaitcore.io.bvh_reader import read_bvh, zxy_from_matrix
-from gaitcore.io.pose_table import read_pose_table
+from gaitcore.io.pose_table import PoseTable, read_pose_table
 from gaitcore.pipeline import Analysis
 from gaitcore.project import Project
 from gaitcore.skeleton import Skeleton, euler_zxy_matrix
@@ -241,46 +242,50 @@ class PosingController(QObject):
     # -- imports and rigs --------------------------------------------------------------------
     def import_csv(self, path: Path | None = None) -> bool:
         """Pose the current key from a row of a pose CSV (channels matched by name)."""
-        if self._require_frame() is None:
-            return False
-        path = path or self.asker.open_file("Import a pose from CSV", "Pose tables (*.csv)")
-        if path is None:
-            return False
-        try:
+
+        def pick(path: Path) -> tuple[PoseTable, int | None]:
             table = read_pose_table(path)
             frames = [int(f) for f in table.frames]
             if not frames:
                 raise GaitInputError("it has no rows")
             row = frames.index(self._state.frame) if self._state.frame in frames else (
                 0 if len(frames) == 1 else self._choose_row(frames))
-            if row is None:
-                return False
-            pose, ignored = map_channels(table.columns, table.values[row], self._state.skeleton)
-        except GaitInputError as exc:
-            self.asker.error("Cannot import the pose", f"{Path(path).name}: {exc}")
-            return False
-        return self._apply_import(pose, ignored, f"import pose from {Path(path).name} (frame {frames[row]})")
+            return table, row
+
+        return self._import_pose(path, "Import a pose from CSV", "Pose tables (*.csv)", pick)
 
     def import_bvh(self, path: Path | None = None) -> bool:
         """Pose the current key from one frame of a BVH file (joints matched by name)."""
-        if self._require_frame() is None:
-            return False
-        path = path or self.asker.open_file("Import a pose from a BVH frame", "BVH motion (*.bvh)")
-        if path is None:
-            return False
-        try:
+
+        def pick(path: Path) -> tuple[PoseTable, int | None]:
             _, table, _ = read_bvh(path)
             n = len(table.frames)
             if n == 0:
                 raise GaitInputError("it has no motion frames")
-            row = 0 if n == 1 else self.asker.choose_frame(f"Frame of {Path(path).name}", list(range(n)))
+            row = 0 if n == 1 else self.asker.choose_frame(f"Frame of {path.name}", list(range(n)))
+            return table, row
+
+        return self._import_pose(path, "Import a pose from a BVH frame", "BVH motion (*.bvh)", pick)
+
+    def _import_pose(self, path: Path | None, title: str, filter_: str,
+                     pick: Callable[[Path], tuple[PoseTable, int | None]]) -> bool:
+        """Ask for a file, let ``pick`` read it and choose a row, and pose the current key
+        with it; any GaitInputError becomes a message and changes nothing."""
+        if self._require_frame() is None:
+            return False
+        path = path or self.asker.open_file(title, filter_)
+        if path is None:
+            return False
+        path = Path(path)
+        try:
+            table, row = pick(path)
             if row is None:
                 return False
             pose, ignored = map_channels(table.columns, table.values[row], self._state.skeleton)
         except GaitInputError as exc:
-            self.asker.error("Cannot import the pose", f"{Path(path).name}: {exc}")
+            self.asker.error("Cannot import the pose", f"{path.name}: {exc}")
             return False
-        return self._apply_import(pose, ignored, f"import pose from {Path(path).name} (frame {row})")
+        return self._apply_import(pose, ignored, f"import pose from {path.name} (frame {int(table.frames[row])})")
 
     def load_rig(self, path: Path | None = None) -> bool:
         """Replace the skeleton by the rig of a BVH file; poses are dropped unless the channels

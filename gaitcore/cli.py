@@ -147,8 +147,8 @@ def _run_animate(args: argparse.Namespace) -> int:
     import numpy as np
 
     from gaitcore.io.analysis_file import read_analysis_json
-    from gaitcore.io.export import EXPORTERS, pose_matrix
-    from gaitcore.io.pose_table import PoseTable, read_pose_table, write_pose_table
+    from gaitcore.io.export import EXPORTERS
+    from gaitcore.io.pose_table import PoseTable, pose_matrix, read_pose_table, write_pose_table
     from gaitcore.pipeline import animate
 
     exports = [(flag, path) for flag, path in (("bvh", args.bvh), ("glb", args.glb))

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from gaitcore.errors import GaitInputError
-from gaitcore.io.pose_table import PoseTable
+from gaitcore.io.pose_table import PoseTable, pose_matrix
 from gaitcore.skeleton import Skeleton
 
 _BVH_CHANNEL = {
@@ -42,13 +42,8 @@ def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: fl
     GaitInputError
         When the table lacks some of the skeleton's channels.
     """
-    index = {c: i for i, c in enumerate(table.columns)}
-    missing = [c for c in skeleton.channel_names if c not in index]
-    if missing:
-        raise GaitInputError(
-            f"the curves lack {len(missing)} channel(s) of skeleton '{skeleton.name}' "
-            f"(first: {', '.join(missing[:3])}); pose every joint of the skeleton"
-        )
+    values = pose_matrix(skeleton, table)
+    channel = {c: i for i, c in enumerate(skeleton.channel_names)}
     if not fps > 0:
         raise GaitInputError(f"frame rate must be positive, got {fps}")
     children: dict[str, list[int]] = {}
@@ -75,7 +70,7 @@ def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: fl
         lines.append(f"{pad}  CHANNELS {len(channels)} " + " ".join(_BVH_CHANNEL[c] for c in channels))
         for c in channels:
             name = f"{j.name}.{c}"
-            col = table.values[:, index[name]] if name in index else np.zeros(len(table.frames))
+            col = values[:, channel[name]] if name in channel else np.zeros(len(table.frames))
             if c.startswith("t"):
                 col = col + j.offset["xyz".index(c[1])]
             columns.append(col)

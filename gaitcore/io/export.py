@@ -15,12 +15,10 @@ from pathlib import Path
 import numpy as np
 
 from gaitcore.errors import GaitInputError
-from gaitcore.io.pose_table import PoseTable, write_pose_table
+from gaitcore.io.pose_table import PoseTable, pose_matrix, write_pose_table
 from gaitcore.skeleton import Skeleton
 
 Progress = Callable[[int, int], bool]
-MAX_LISTED = 12
-"""Missing channels named in an error message before '... and N more'."""
 
 
 @dataclass(frozen=True)
@@ -50,7 +48,6 @@ def _write_csv(path: Path, skeleton: Skeleton | None, table: PoseTable, fps: flo
 def _write_bvh(path: Path, skeleton: Skeleton | None, table: PoseTable, fps: float) -> None:
     from gaitcore.io.bvh import write_bvh
 
-    pose_matrix(skeleton, table)  # the full list of missing channels, if any
     write_bvh(path, skeleton, table, fps=fps)
 
 
@@ -109,26 +106,6 @@ def export_animation(path: str | Path, skeleton: Skeleton | None, table: PoseTab
         raise GaitInputError(f"frame rate must be a positive number, got {fps}")
     exporter.write(path, skeleton, table, float(fps))
     return path
-
-
-def pose_matrix(skeleton: Skeleton, table: PoseTable) -> np.ndarray:
-    """The table's values re-ordered as ``skeleton.channel_names``, shape (n, k).
-
-    Raises
-    ------
-    GaitInputError
-        Some channels of the skeleton are not columns of the table; the message lists them.
-    """
-    index = {c: i for i, c in enumerate(table.columns)}
-    missing = [c for c in skeleton.channel_names if c not in index]
-    if missing:
-        listed = ", ".join(missing[:MAX_LISTED])
-        more = f" and {len(missing) - MAX_LISTED} more" if len(missing) > MAX_LISTED else ""
-        raise GaitInputError(
-            f"the curves lack {len(missing)} of the {skeleton.n_channels} channels of skeleton "
-            f"{skeleton.name!r}: {listed}{more}; give the key poses a column for every channel "
-            "of the skeleton")
-    return np.asarray(table.values, float)[:, [index[c] for c in skeleton.channel_names]]
 
 
 # ---------------------------------------------------------------- preview video

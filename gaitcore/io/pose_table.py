@@ -9,10 +9,17 @@ from __future__ import annotations
 import csv
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+
+if TYPE_CHECKING:
+    from gaitcore.skeleton import Skeleton
+
+MAX_LISTED = 12
+"""Missing channels named in an error message before '... and N more'."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -110,3 +117,23 @@ def write_pose_table(path: str | Path, table: PoseTable, *, fps: float | None = 
         for f, row in zip(table.frames, table.values):
             lead = [int(f)] + ([f"{f / fps:.6f}"] if fps else [])
             w.writerow(lead + [repr(float(v)) for v in row])
+
+
+def pose_matrix(skeleton: "Skeleton", table: PoseTable) -> np.ndarray:
+    """The table's values re-ordered as ``skeleton.channel_names``, shape (n, k).
+
+    Raises
+    ------
+    GaitInputError
+        Some channels of the skeleton are not columns of the table; the message lists them.
+    """
+    index = {c: i for i, c in enumerate(table.columns)}
+    missing = [c for c in skeleton.channel_names if c not in index]
+    if missing:
+        listed = ", ".join(missing[:MAX_LISTED])
+        more = f" and {len(missing) - MAX_LISTED} more" if len(missing) > MAX_LISTED else ""
+        raise GaitInputError(
+            f"the curves lack {len(missing)} of the {skeleton.n_channels} channels of skeleton "
+            f"{skeleton.name!r}: {listed}{more}; give the key poses a column for every channel "
+            "of the skeleton")
+    return np.asarray(table.values, float)[:, [index[c] for c in skeleton.channel_names]]
