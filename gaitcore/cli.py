@@ -263,10 +263,10 @@ def _run_evaluate(args: argparse.Namespace) -> int:
     print(f"{args.gait}: {ev.n_angles} angles, period {ev.period_frames:.1f} frames")
     print("variance %: " + " ".join(f"{100 * v:.1f}" for v in ev.variance_ratio))
     print("r per PC:   " + " ".join(f"{r:.2f}" for r in ev.correlations))
-    print("pcs keys  mean_deg  std_deg")
+    print("pcs keys  mean_deg  std_deg  floor_deg")
     for c in ev.grid:
-        tag = " (switching)" if c.switching else ""
-        print(f"{c.pcs:3d} {c.keys:4d} {c.mean_deg:9.2f} {c.std_deg:8.2f}{tag}")
+        tail = "  (switching)" if c.switching else f"  {c.floor_deg:9.2f}"
+        print(f"{c.pcs:3d} {c.keys:4d} {c.mean_deg:9.2f} {c.std_deg:8.2f}{tail}")
     return 0
 
 

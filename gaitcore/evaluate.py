@@ -13,6 +13,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from gaitcore.blend_floor import blend_floor
 from gaitcore.errors import GaitInputError
 from gaitcore.pipeline import Analysis, AnalysisSettings, analyze_silhouettes, animate, rekey
 from gaitcore.silhouette import crop_rois
@@ -56,7 +57,12 @@ class BenchSettings:
 
 @dataclass(frozen=True)
 class GridCell:
-    """Error of one (pcs, keys) configuration, degrees."""
+    """Error of one (pcs, keys) configuration, degrees.
+
+    ``floor_deg`` is the least error any blend of the same key poses reaches
+    (:func:`gaitcore.blend_floor.blend_floor`); None for switching models, whose frames
+    blend different sets.
+    """
 
     pcs: int
     keys: int
@@ -65,6 +71,7 @@ class GridCell:
     key_frames: tuple[int, ...]
     switching: bool = False
     alternate_frames: tuple[int, ...] = ()
+    floor_deg: float | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,7 +109,8 @@ class Evaluation:
                     "mean_deg": round(c.mean_deg, 4),
                     "std_deg": round(c.std_deg, 4),
                     "key_frames": list(c.key_frames),
-                    **({"alternate_frames": list(c.alternate_frames)} if c.switching else {}),
+                    **({"alternate_frames": list(c.alternate_frames)} if c.switching
+                       else {"floor_deg": round(c.floor_deg, 4)}),
                 }
                 for c in self.grid
             ],
@@ -180,7 +188,8 @@ def evaluate_gait(
     -----
     Paper Section 4 and Figure 6. The error is the mean (and standard deviation) of the
     absolute difference between true and predicted angles, over every frame and every
-    rotation about Z, the axis perpendicular to the image plane.
+    rotation about Z, the axis perpendicular to the image plane. Each cell also carries the
+    floor of its key poses: the part of the error no timing could remove.
     """
     if not pcs or not keys or min(pcs) < 1 or min(keys) < 1:
         raise GaitInputError("--pcs and --keys need positive numbers")
@@ -191,6 +200,7 @@ def evaluate_gait(
     )
     grid: list[GridCell] = []
     analyses: dict[tuple[int, int], Analysis] = {}
+    floors: dict[tuple[int, ...], float] = {}
     for c in pcs:
         for m in keys:
             a = rekey(base, AnalysisSettings(pcs=c, keys=m, switching=switching,
@@ -199,7 +209,10 @@ def evaluate_gait(
             posed = {f: truth[f] for f in a.posed_frames}
             pred = animate(a.coords, a.key_frames, posed)
             err = angle_error_deg(pred[:, idx], truth[:, idx])
-            grid.append(GridCell(c, m, float(err.mean()), float(err.std()), a.key_frames))
+            if a.key_frames not in floors:
+                floors[a.key_frames] = blend_floor(truth[:, idx], a.key_frames)
+            grid.append(GridCell(c, m, float(err.mean()), float(err.std()), a.key_frames,
+                                 floor_deg=floors[a.key_frames]))
             if a.alternate_frames is not None:
                 pred = animate(a.coords, a.key_frames, posed,
                                alternate_frames=a.alternate_frames, theta=a.loop_angle)
