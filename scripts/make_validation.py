@@ -1,6 +1,6 @@
 """Regenerate docs/validation.md and its figures: the paper's Section 4 on our synthetic bench.
 
-    .venv/bin/python scripts/make_validation.py      (about two minutes on 2 cores)
+    .venv/bin/python scripts/make_validation.py      (about four minutes on 2 cores)
 
 Every figure in the document comes from ``gaitcore.evaluate`` run here; nothing is typed in.
 """
@@ -14,8 +14,11 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 import numpy as np  # noqa: E402
 
+from gaitcore.blend_floor import best_blend_floor  # noqa: E402
 from gaitcore.evaluate import BenchSettings, evaluate_gait  # noqa: E402
 from gaitcore.plots import plot_error_curves, plot_trajectory  # noqa: E402
+from gaitcore.skeleton import load_template  # noqa: E402
+from gaitcore.synth.gaits import generate_gait  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -30,26 +33,21 @@ PAPER_R = {"walk": (.99, .94, "<.01", .05, "<.01"), "canter": (.94, .89, .08, "<
            "gallop": (.90, .92, .01, "<.01", "<.01")}
 
 
-def oracle_error(gait: str, n_keys: int) -> float:
-    """Error floor of any method that only interpolates n_keys poses of the cycle: the keys
-    are spread evenly over one true cycle and every frame is interpolated linearly in its
-    true phase (no silhouette, no PCA: the best possible timing)."""
-    from gaitcore.evaluate import angle_error_deg
-    from gaitcore.skeleton import load_template
-    from gaitcore.synth.gaits import GAITS, generate_gait
-
+def true_angles(gait: str, n_frames: int = 100) -> np.ndarray:
+    """The true angles about the image normal of the bench clip."""
     skel = load_template("horse")
-    period = GAITS[gait].period_frames
-    truth = generate_gait(skel, gait, 100)
-    idx = skel.sagittal_angle_indices
-    key_phase = np.arange(n_keys) / n_keys
-    key_poses = np.stack([generate_gait(skel, gait, 1, phase=float(ph))[0] for ph in key_phase])
-    phase = (np.arange(100) / period) % 1.0
-    pred = np.column_stack([
-        np.interp(phase, np.r_[key_phase, 1.0], np.r_[key_poses[:, j], key_poses[0, j]])
-        for j in idx
-    ])
-    return float(angle_error_deg(pred, truth[:, idx]).mean())
+    return generate_gait(skel, gait, n_frames)[:, skel.sagittal_angle_indices]
+
+
+def fundamental_share(ev) -> np.ndarray:
+    """Share of each PC's variance carried by a sinusoid at the gait frequency f0."""
+    diagnosis = ev.analyses[min(ev.analyses)].diagnosis
+    t = np.arange(len(ev.projections))
+    basis = np.column_stack([np.cos(2 * np.pi * diagnosis.f0 * t),
+                             np.sin(2 * np.pi * diagnosis.f0 * t), np.ones_like(t)])
+    x = ev.projections - ev.projections.mean(axis=0)
+    fit = basis @ np.linalg.lstsq(basis, x, rcond=None)[0]
+    return (fit**2).sum(axis=0) / (x**2).sum(axis=0)
 
 
 def _row(*cells) -> str:
@@ -106,20 +104,47 @@ def main() -> None:
         out.append(_row(gait, f"{c.mean_deg:.2f} ({c.std_deg:.2f})",
                         f"{best.mean_deg:.2f} ({best.pcs} PCs, {best.keys} keys)",
                         f"{sw.mean_deg:.2f} ({sw.std_deg:.2f})" if sw else "-", target))
+    floors = {(g, m): best_blend_floor(true_angles(g), m)
+              for g in ("canter", "gallop") for m in (4, 5)}
     out += [
         "",
-        "Why the 2.0 deg target for canter and gallop is missed: on this motion it is below what",
-        "interpolating 4 poses reaches even with perfect timing. Given the true phase of every frame",
-        "(perfect timing, which PCA only approximates) and 4 keys spread evenly over the cycle,",
-        "linear interpolation in phase gives the floors below; the legs' joints sweep 60-110 deg",
-        "per stride with sharp stance/swing transitions that 4 samples cannot describe.",
+        "### Why 2.0 deg with 4 keys is out of reach on canter and gallop",
         "",
-        _row("gait", "floor, 4 keys", "floor, 6 keys", "floor, 8 keys", "ours, 4 keys 2 PCs"),
-        _row(*["---"] * 5),
+        "The RBF map predicts every frame as a linear combination of the key poses, so no",
+        "timing, kernel or segmentation can beat, frame by frame, the best linear blend of",
+        "those poses (`gaitcore/blend_floor.py`). That floor, in the same metric:",
+        "",
+        "- *our keys*: exact (least absolute deviations, a linear program per frame) for the",
+        "  keys the condition number picked; `gaitcore evaluate` prints it as `floor_deg`;",
+        "- *any m poses*: over every set of m distinct poses of the motion, a proven lower",
+        "  bound (linear programming duality) and the floor of the best set found; the best",
+        "  possible set lies between the two.",
+        "",
+        _row("gait", "keys", "ours, 2 PCs", "floor of our keys", "any m poses: proven >=",
+             "any m poses: best found", "sets examined"),
+        _row(*["---"] * 7),
     ]
-    for gait in ("canter", "gallop"):
-        out.append(_row(gait, *[f"{oracle_error(gait, k):.2f}" for k in (4, 6, 8)],
-                        f"{results[gait].cell(2, 4).mean_deg:.2f}"))
+    for (gait, m), f in floors.items():
+        c = results[gait].cell(2, m)
+        out.append(_row(gait, m, f"{c.mean_deg:.2f}", f"{c.floor_deg:.2f}",
+                        f"{f.lower_deg:.2f}", f"{f.achieved_deg:.2f} (frames "
+                        f"{', '.join(map(str, f.key_frames))})", f.n_sets))
+    out += [
+        "",
+        "So no choice of 4 poses of this canter blends closer than "
+        f"{floors['canter', 4].lower_deg:.2f} deg, nor of this gallop closer than "
+        f"{floors['gallop', 4].lower_deg:.2f} deg:",
+        "the target is below what the paper's method can reach on this motion, whatever its",
+        "timing. The legs' joints sweep 60-110 deg per stride with sharp stance/swing",
+        "transitions; the gaits were not smoothed to flatter the metric. Of our 4-key error,",
+        "the part above the floor of the same keys is what timing (PCA + RBF) costs:",
+        f"{results['canter'].cell(2, 4).mean_deg - results['canter'].cell(2, 4).floor_deg:.2f}"
+        " deg on the canter, "
+        f"{results['gallop'].cell(2, 4).mean_deg - results['gallop'].cell(2, 4).floor_deg:.2f}"
+        " deg on the gallop. The joint ranges come from the inverse",
+        "kinematics of the hoof paths and have not been checked against measured equine",
+        "kinematics; a smaller range of motion would lower the floors roughly in proportion.",
+    ]
     out += ["", "## Error grid (mean deg), keys x PCs, as the paper's Figure 6", ""]
     for gait, ev in results.items():
         pcs = sorted({c.pcs for c in ev.grid})
@@ -146,7 +171,26 @@ def main() -> None:
                         f"{ev.period_frames:.1f}",
                         "yes" if min(r[:2]) >= 0.6 else "no",
                         "yes" if np.all(r[2:5] <= 0.3) else f"no (max {r[2:5].max():.2f})"))
-    out += ["", "## Region of interest: the paper's per-frame centre of mass vs. ours", "",
+    out += ["", "Share of each PC's variance carried by the gait frequency f0 (a sinusoid at f0",
+            "fitted by least squares), and the band's share of the spectrum: broadband noise",
+            "reaches r of about the square root of that share, so on 100 frames a PC with no",
+            "periodic content at all scores about 0.27 (the paper's threshold is 0.3).", "",
+            _row("gait", "f0 share of PC1..PC5", "band share", "noise r ~ sqrt(share)"),
+            _row(*["---"] * 4)]
+    for gait, ev in results.items():
+        d = ev.analyses[min(ev.analyses)].diagnosis
+        share = (min(d.band[1], 0.5) - d.band[0]) / 0.5
+        out.append(_row(gait, " ".join(f"{v:.3f}" for v in fundamental_share(ev)[:5]),
+                        f"{share:.3f}", f"{np.sqrt(share):.2f}"))
+    out += ["", "The gallop's PC4 keeps "
+            f"{100 * fundamental_share(results['gallop'])[3]:.0f} % of its variance at f0: "
+            "most of the rest is at 2 f0. The",
+            "gallop's silhouettes have a strong second harmonic, which PCA mixes into PC1 and",
+            f"PC2 (their f0 shares are {fundamental_share(results['gallop'])[0]:.2f} and "
+            f"{fundamental_share(results['gallop'])[1]:.2f}), leaving some of the f0 variance to PC3",
+            "and PC4. It is periodic motion, not noise; we report the miss rather than tune the",
+            "band or the crop until it passes.",
+            "", "## Region of interest: the paper's per-frame centre of mass vs. ours", "",
             "The paper centres the window on each frame's centre of mass, which swings with",
             "the legs; we centre it on the track averaged over one gait period (found by a first",
             "diagnosis), which cancels the per-stride wobble and keeps the body's bounce in the",
