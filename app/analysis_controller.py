@@ -4,7 +4,7 @@ Every gaitcore call of the analysis step is here. A change of the silhouettes (o
 working size) reruns the whole analysis (PCA, diagnosis, keys); a change of the number of
 PCs or keys, of pinned or dropped keys or of switching only reruns the key search on the
 projections already computed. Requests are coalesced for 80 ms (spin boxes) and a newer one
-cancels the running one.
+cancels the running one; a long one (a long clip's PCA) shows its progress with Cancel.
 """
 
 from __future__ import annotations
@@ -12,9 +12,10 @@ from __future__ import annotations
 from dataclasses import replace
 
 from PySide6.QtCore import QObject, QTimer
+from PySide6.QtWidgets import QWidget
 
 from app.state import AppState
-from app.workers import Job, JobRunner, Progress
+from app.workers import Job, JobRunner, Progress, ProgressDialog
 from gaitcore.errors import GaitInputError
 from gaitcore.keyimages import select_key_images
 from gaitcore.pipeline import Analysis, AnalysisSettings, analyze_silhouettes
@@ -99,13 +100,17 @@ class AnalysisController(QObject):
         current = self._state.analysis
         if current is not None and self._analysed is silhouettes and (
                 current.settings.max_side_px == settings.max_side_px):
-            job = Job(lambda progress: reselect(current, settings, progress), "Choosing key-images")
+            job = Job(lambda progress: reselect(current, settings, progress), "Choosing key-images",
+                      unit=None)
         else:
-            job = Job(lambda progress: analyze(silhouettes, settings, progress), "Analysing the clip")
+            job = Job(lambda progress: analyze(silhouettes, settings, progress),
+                      "Analysing the clip", unit=None)
         job.succeeded.connect(lambda result, j=job, s=silhouettes: self._done(j, s, result))
         job.failed.connect(lambda message, j=job: self._failed(j, message))
         job.cancelled.connect(lambda j=job: self._finished(j))
         self._job = job
+        if isinstance(self.parent(), QWidget):
+            ProgressDialog(job, self.parent())  # shows itself only past 300 ms
         self._runner.start(job)
 
     def _done(self, job: Job, silhouettes: Silhouettes, analysis: Analysis) -> None:

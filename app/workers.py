@@ -27,6 +27,9 @@ _PROGRESS_INTERVAL_S = 0.03
 class Job(QObject):
     """One background computation, ``fn(progress)``.
 
+    ``unit`` names what ``progress`` counts (shown as "done of total unit"); None when the
+    counts are only a scale (shown as a percentage).
+
     Signals
     -------
     progressed(int, int)
@@ -48,9 +51,11 @@ class Job(QObject):
     cancelled = Signal()
     finished = Signal()
 
-    def __init__(self, fn: Callable[[Progress], object], title: str) -> None:
+    def __init__(self, fn: Callable[[Progress], object], title: str, *,
+                 unit: str | None = "frames") -> None:
         super().__init__()
         self.title = title
+        self.unit = unit
         self._fn = fn
         self._cancel = threading.Event()
         self._last_emit = 0.0
@@ -142,7 +147,14 @@ class ProgressDialog(QProgressDialog):
         if self.maximum() != total:
             self.setMaximum(max(total, 0))
         self.setValue(min(done, total) if total else 0)
-        self.setLabelText(f"{self._job.title}: {done} of {total}" if total else self._job.title + "...")
+        self.setLabelText(self._label(done, total))
+
+    def _label(self, done: int, total: int) -> str:
+        if not total:
+            return self._job.title + "..."
+        if self._job.unit is None:
+            return f"{self._job.title}: {100 * min(done, total) // total} %"
+        return f"{self._job.title}: {done} of {total} {self._job.unit}"
 
     def _on_finished(self) -> None:
         self.canceled.disconnect(self._job.cancel)

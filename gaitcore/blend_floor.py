@@ -102,7 +102,7 @@ def best_blend_floor(truth: np.ndarray, keys: int, *,
     keys : int
         Poses per set.
     progress : callable(done, total) -> bool, optional
-        Called after each chunk of sets; return False to stop (raises GaitInputError).
+        Called after each chunk of sets; returning False cancels with InterruptedError.
 
     Returns
     -------
@@ -111,7 +111,9 @@ def best_blend_floor(truth: np.ndarray, keys: int, *,
     Raises
     ------
     GaitInputError
-        ``keys`` outside 1 .. number of distinct poses, more than MAX_SETS sets, or stopped.
+        ``keys`` outside 1 .. number of distinct poses, or more than MAX_SETS sets.
+    InterruptedError
+        If ``progress`` returned False.
     """
     truth = _as_motion(truth)
     poses, counts, first = _distinct(truth)
@@ -135,7 +137,7 @@ def best_blend_floor(truth: np.ndarray, keys: int, *,
             fit, best = float(ls.min()), chunk[int(np.argmin(ls))]
         done += len(chunk)
         if progress is not None and progress(done, n_sets) is False:
-            raise GaitInputError("floor search stopped")
+            raise InterruptedError("floor search stopped")
     achieved = _lad(poses[best], poses, weights)
     return BestBlendFloor(keys, n_sets, lower, achieved, tuple(sorted(int(f) for f in first[best])))
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -18,6 +19,11 @@ the components come from a randomized SVD that streams the frames in chunks (lon
 _CHUNK_ROWS = 512
 _OVERSAMPLE = 10
 _POWER_ITERS = 4
+_STREAM_PASSES = 5 + 2 * _POWER_ITERS
+"""Passes over the frames of the streamed fit: mean, variance, sketch, 2 per power
+iteration, components, projections."""
+
+Progress = Callable[[int, int], bool]
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,7 +56,8 @@ class ImagePCA:
     projections: np.ndarray
 
     @classmethod
-    def fit(cls, images: np.ndarray, n_components: int = 5) -> "ImagePCA":
+    def fit(cls, images: np.ndarray, n_components: int = 5, *,
+            progress: Progress | None = None) -> "ImagePCA":
         """Fit the PCA to a stack of images.
 
         Parameters
@@ -61,6 +68,9 @@ class ImagePCA:
         n_components : int
             Number of components to keep, c >= 1. Fewer are kept when the clip has fewer
             non-zero eigenvalues (at most n - 1).
+        progress : callable(done, total) -> bool, optional
+            Called as the frames are read (after each chunk of a long clip); returning False
+            cancels.
 
         Returns
         -------
@@ -70,6 +80,8 @@ class ImagePCA:
         ------
         GaitInputError
             Fewer than 2 frames, non-finite values, or frames that are all identical.
+        InterruptedError
+            If ``progress`` returned False.
 
         Notes
         -----
@@ -82,8 +94,10 @@ class ImagePCA:
         _check_stack(arr)
         if n_components < 1:
             raise GaitInputError(f"n_components must be at least 1, got {n_components}")
+        report = _Reporter(progress)
         if arr.shape[0] * arr.shape[1] * arr.shape[2] > DENSE_LIMIT:
-            return cls._fit_streamed(arr, n_components)
+            return cls._fit_streamed(arr, n_components, report)
+        report(0, 1)
         x = _as_float_stack(arr)
         n = x.shape[0]
         mean = x.mean(axis=0)
@@ -110,10 +124,12 @@ class ImagePCA:
             sing = sing_all[:c]
             comps = vt[:c]
             total = float((sing_all**2).sum()) / n
+        report(1, 1)
         return cls._finish(arr.shape, mean, comps, sing, total, x @ comps.T)
 
     @classmethod
-    def _fit_streamed(cls, arr: np.ndarray, n_components: int) -> "ImagePCA":
+    def _fit_streamed(cls, arr: np.ndarray, n_components: int,
+                      report: "_Reporter") -> "ImagePCA":
         """Randomized SVD (Halko, Martinsson and Tropp 2011) over chunks of frames.
 
         Memory stays at a few chunks of float rows plus (frames + pixels) x (c + 10) floats,
@@ -124,12 +140,21 @@ class ImagePCA:
         d = flat.shape[1]
         # Scaled like _as_float_stack: 0/255 masks and grey levels map to [0, 1].
         scale = 255.0 if np.issubdtype(flat.dtype, np.integer) and flat.max(initial=0) > 1 else 1.0
+        n_chunks = -(-n // _CHUNK_ROWS)
+        passes = iter(range(_STREAM_PASSES))
+
+        def chunks():  # one pass over the frames, reported chunk by chunk
+            start = next(passes) * n_chunks
+            for i, rows in enumerate(_chunks(flat, scale)):
+                yield i, rows
+                report(start + i + 1, _STREAM_PASSES * n_chunks)
+
         mean = np.zeros(d)
         sq_sum = 0.0
-        for rows in _chunks(flat, scale):
+        for _, rows in chunks():
             mean += rows.sum(axis=0)
         mean /= n
-        for rows in _chunks(flat, scale):
+        for _, rows in chunks():
             sq_sum += float(((rows - mean) ** 2).sum())
         total = sq_sum / n
         if total <= 0:
@@ -139,13 +164,13 @@ class ImagePCA:
         def times(v: np.ndarray) -> np.ndarray:  # (X - mean) @ v, shape (n, l)
             out = np.empty((n, v.shape[1]))
             shift = mean @ v
-            for i, rows in enumerate(_chunks(flat, scale)):
+            for i, rows in chunks():
                 out[i * _CHUNK_ROWS : i * _CHUNK_ROWS + rows.shape[0]] = rows @ v - shift
             return out
 
         def times_t(u: np.ndarray) -> np.ndarray:  # (X - mean).T @ u, shape (d, l)
             acc = -np.outer(mean, u.sum(axis=0))
-            for i, rows in enumerate(_chunks(flat, scale)):
+            for i, rows in chunks():
                 acc += rows.T @ u[i * _CHUNK_ROWS : i * _CHUNK_ROWS + rows.shape[0]]
             return acc
 
@@ -234,6 +259,17 @@ _IDENTICAL = (
     "all frames are identical: there is no motion to analyse; check the silhouettes or "
     "choose another clip"
 )
+
+
+class _Reporter:
+    """Calls ``progress``; raises InterruptedError when it returns False."""
+
+    def __init__(self, progress: Progress | None) -> None:
+        self._progress = progress
+
+    def __call__(self, done: int, total: int) -> None:
+        if self._progress is not None and self._progress(done, total) is False:
+            raise InterruptedError("PCA cancelled")
 
 
 def _chunks(flat: np.ndarray, scale: float):

@@ -159,7 +159,8 @@ def analyze_silhouettes(
     sketched : bool
         The silhouettes come from sketches (changes the advice of an unusable diagnosis).
     progress : callable(done, total) -> bool, optional
-        Reports the key search; returning False cancels with ``InterruptedError``.
+        Reports the PCA (one pass per crop placement) and the key search as equal stages;
+        returning False cancels with ``InterruptedError``.
 
     Raises
     ------
@@ -172,10 +173,11 @@ def analyze_silhouettes(
             f"only {found.size} frame(s) with a subject for {settings.keys} key-images; "
             "use a longer clip or fewer keys"
         )
-    pca, proj, diagnosis = _describe(roi, settings, sketched)
+    stages = 3 if settings.stabilize_roi else 2
+    pca, proj, diagnosis = _describe(roi, settings, sketched, _stage(progress, 0, stages))
     if settings.stabilize_roi and diagnosis.verdict is not Verdict.NOT_USABLE:
         roi = stabilize_rois(roi, diagnosis.period_frames)
-        pca, proj, diagnosis = _describe(roi, settings, sketched)
+        pca, proj, diagnosis = _describe(roi, settings, sketched, _stage(progress, 1, stages))
     theta = loop_angle(diagnosis.filtered)
     for arr in (proj, theta):
         arr.setflags(write=False)
@@ -188,11 +190,26 @@ def analyze_silhouettes(
         selection=KeySelection(frames=(), condition_number=float("nan"), exact=False, nodes_visited=0),
         loop_angle=theta,
     )
-    return rekey(motion, settings, progress=progress)
+    return rekey(motion, settings, progress=_stage(progress, stages - 1, stages))
+
+
+_STAGE_STEPS = 1000
+
+
+def _stage(progress: Progress | None, index: int, count: int) -> Progress | None:
+    """``progress`` as seen by stage ``index`` of ``count`` equal stages."""
+    if progress is None:
+        return None
+
+    def report(done: int, total: int) -> bool:
+        step = round(_STAGE_STEPS * done / total) if total > 0 else 0
+        return progress(index * _STAGE_STEPS + step, count * _STAGE_STEPS)
+
+    return report
 
 
 def _describe(
-    roi: RoiClip, settings: AnalysisSettings, sketched: bool
+    roi: RoiClip, settings: AnalysisSettings, sketched: bool, progress: Progress | None = None
 ) -> tuple[ImagePCA, np.ndarray, Diagnosis]:
     """PCA of the crops where the subject was found, projections of every frame (lost ones
     interpolated in time), and the spectral diagnosis."""
@@ -201,7 +218,7 @@ def _describe(
     images = working_images(roi, settings.max_side_px)
     if found.size < n:
         images = images[found]
-    pca = ImagePCA.fit(images, n_components=max(N_DIAGNOSIS_PCS, settings.pcs))
+    pca = ImagePCA.fit(images, n_components=max(N_DIAGNOSIS_PCS, settings.pcs), progress=progress)
     proj = np.empty((n, pca.n_components))
     proj[found] = pca.projections
     if found.size < n:

@@ -2,13 +2,21 @@
 
 from __future__ import annotations
 
+import time
+from dataclasses import replace
+
 import numpy as np
 from PySide6.QtCore import QPoint, QTimer, Qt
-from PySide6.QtWidgets import QApplication
+from PySide6.QtWidgets import QApplication, QPushButton
 
+import gaitcore.image_pca as image_pca
 from app.widgets.frame_canvas import Tool
+from app.workers import ProgressDialog
 from gaitcore.io.project_file import load_project
+from gaitcore.project import Silhouettes
+from gaitcore.silhouette import crop_rois
 from tests.app.conftest import viewport_pos, wait_ready
+from tests.gaitcore.walker import walker_clip
 
 
 def drag(qtbot, window, points_xy):
@@ -228,3 +236,27 @@ def test_timeline_click_moves_the_frame(qtbot, window, canter_clip):
     x = int(timeline.x_of(64))
     qtbot.mouseClick(timeline, Qt.MouseButton.LeftButton, pos=QPoint(x, 25))
     assert window.state.frame == 64
+
+
+def test_a_long_analysis_shows_its_progress_and_cancel_stops_it(qtbot, window, monkeypatch):
+    slow_chunks = image_pca._chunks
+
+    def chunks(flat, scale):  # a long clip's PCA, made slow enough to watch
+        for rows in slow_chunks(flat, scale):
+            time.sleep(0.05)
+            yield rows
+
+    monkeypatch.setattr(image_pca, "DENSE_LIMIT", 1000)
+    monkeypatch.setattr(image_pca, "_chunks", chunks)
+    silhouettes = Silhouettes(crop_rois(walker_clip(600)), "masks")
+    window.state.set_project(replace(window.state.project, silhouettes=silhouettes))
+    qtbot.waitUntil(lambda: any(d.isVisible() for d in window.findChildren(ProgressDialog)),
+                    timeout=10_000)
+    dialog = next(d for d in window.findChildren(ProgressDialog) if d.isVisible())
+    qtbot.waitUntil(lambda: dialog.labelText().endswith("%"), timeout=5000)
+    assert dialog.labelText().startswith("Analysing the clip: ")
+    started = time.monotonic()
+    qtbot.mouseClick(dialog.findChild(QPushButton), Qt.MouseButton.LeftButton)
+    qtbot.waitUntil(lambda: not window.analysis.running, timeout=5000)
+    assert time.monotonic() - started < 1.0  # stopped at the next chunk, not at the end
+    assert window.state.analysis is None

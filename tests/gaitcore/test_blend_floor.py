@@ -89,5 +89,5 @@ def test_best_floor_rejects_bad_input():
         best_blend_floor(truth, 7)
     with pytest.raises(GaitInputError, match=f"more than {MAX_SETS}"):
         best_blend_floor(np.random.default_rng(0).normal(size=(200, 3)), 5)
-    with pytest.raises(GaitInputError, match="stopped"):
+    with pytest.raises(InterruptedError, match="stopped"):
         best_blend_floor(truth, 2, progress=lambda done, total: False)

@@ -103,3 +103,36 @@ def test_streamed_randomized_svd_matches_the_dense_route(monkeypatch):
     np.testing.assert_allclose(streamed.total_variance, dense.total_variance, rtol=1e-9)
     np.testing.assert_allclose(streamed.mean, dense.mean, atol=1e-12)
     np.testing.assert_allclose(np.abs(streamed.projections[:, :2]), np.abs(dense.projections[:, :2]), atol=1e-4)
+
+
+@pytest.mark.parametrize("limit", [None, 1000])
+def test_progress_reaches_the_end_and_changes_nothing(monkeypatch, limit):
+    import gaitcore.image_pca as module
+
+    imgs = _moving_bar(1100, (12, 16))
+    if limit is not None:  # the streamed route: 3 chunks of frames, 13 passes
+        monkeypatch.setattr(module, "DENSE_LIMIT", limit)
+    calls = []
+    fitted = ImagePCA.fit(imgs, n_components=3, progress=lambda d, t: calls.append((d, t)))
+    plain = ImagePCA.fit(imgs, n_components=3)
+    np.testing.assert_array_equal(fitted.projections, plain.projections)
+    done = [d for d, _ in calls]
+    assert done == sorted(done) and len({t for _, t in calls}) == 1
+    assert calls[-1][0] == calls[-1][1] == (1 if limit is None else 3 * 13)
+
+
+@pytest.mark.parametrize("limit", [None, 1000])
+def test_progress_returning_false_cancels(monkeypatch, limit):
+    import gaitcore.image_pca as module
+
+    if limit is not None:
+        monkeypatch.setattr(module, "DENSE_LIMIT", limit)
+    calls = []
+
+    def stop_at_fifth(done, total):
+        calls.append(done)
+        return len(calls) < 5 if limit else False
+
+    with pytest.raises(InterruptedError, match="PCA cancelled"):
+        ImagePCA.fit(_moving_bar(1100, (12, 16)), n_components=3, progress=stop_at_fifth)
+    assert len(calls) == (5 if limit else 1)
