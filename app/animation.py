@@ -15,36 +15,18 @@ from dataclasses import dataclass
 import numpy as np
 from PySide6.QtCore import QObject, QTimer, Signal
 
+from app.commands import AnimationOptionsCommand
 from app.posing import alternates_in_use, missing_poses
 from app.state import AppState
 from gaitcore.animation import InterpolationWeights, interpolation_weights, loop_cycle
 from gaitcore.errors import GaitInputError
 from gaitcore.io.analysis_file import analysis_record
 from gaitcore.pipeline import Analysis, animate
-from gaitcore.project import Project
+from gaitcore.project import AnimationOptions, Project
 from gaitcore.skeleton import Skeleton
 
 CLAMP_RANGE = (0.0, 1.0)
 _COALESCE_MS = 40
-
-
-@dataclass(frozen=True)
-class AnimationOptions:
-    """How the preview (and the export) is computed.
-
-    Attributes
-    ----------
-    filtered : bool
-        Drive the animation with the band-pass filtered PC trajectories (paper 5.2).
-    clamp : bool
-        Clamp the RBF weights to :data:`CLAMP_RANGE` (paper 2.4).
-    loop : bool
-        Play and export one gait cycle, cut at the detected period and closed on itself.
-    """
-
-    filtered: bool = False
-    clamp: bool = False
-    loop: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,7 +116,6 @@ class AnimationController(QObject):
     def __init__(self, state: AppState, parent: QObject | None = None) -> None:
         super().__init__(parent)
         self._state = state
-        self._options = AnimationOptions()
         self._animation: Animation | None = None
         self._status = ""
         self._timer = QTimer(self, singleShot=True, interval=_COALESCE_MS)
@@ -148,7 +129,8 @@ class AnimationController(QObject):
 
     @property
     def options(self) -> AnimationOptions:
-        return self._options
+        """The project's options (saved with it; changed by an undoable command)."""
+        return self._state.project.animation
 
     @property
     def status(self) -> str:
@@ -159,8 +141,9 @@ class AnimationController(QObject):
         return self._timer.isActive()
 
     def set_options(self, options: AnimationOptions) -> None:
-        if options != self._options:
-            self._options = options
+        """Change the options as one undo step; the preview follows at once."""
+        if options != self.options:
+            self._state.undo_stack.push(AnimationOptionsCommand(self._state, options))
             self.recompute()
 
     def _schedule(self, *_changed) -> None:
@@ -171,7 +154,8 @@ class AnimationController(QObject):
         self._timer.stop()
         state = self._state
         try:
-            animation = compute_animation(state.project, state.analysis, state.skeleton, self._options)
+            animation = compute_animation(state.project, state.analysis, state.skeleton,
+                                          self.options)
         except GaitInputError as exc:
             animation, status = None, str(exc)
         else:

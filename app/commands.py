@@ -14,7 +14,7 @@ from PySide6.QtGui import QUndoCommand
 from app.state import AppState
 from gaitcore.model import Rect, Stroke
 from gaitcore.pipeline import AnalysisSettings
-from gaitcore.project import Project, Silhouettes
+from gaitcore.project import AnimationOptions, Project, Silhouettes
 
 _SETTINGS_ID = 1001
 
@@ -142,3 +142,11 @@ class SetSilhouettesCommand(ProjectCommand):
 
     def __init__(self, state: AppState, silhouettes: Silhouettes | None, text: str) -> None:
         super().__init__(state, replace(state.project, silhouettes=silhouettes), text)
+
+
+class AnimationOptionsCommand(ProjectCommand):
+    """Change how the keys are animated (filtered, clamped, looped): saved with the project."""
+
+    def __init__(self, state: AppState, options: AnimationOptions) -> None:
+        super().__init__(state, replace(state.project, animation=options),
+                         "change animation options")

@@ -90,6 +90,25 @@ class Silhouettes:
 
 
 @dataclass(frozen=True)
+class AnimationOptions:
+    """How the animation is computed from the posed keys, in the preview and the exports.
+
+    Attributes
+    ----------
+    filtered : bool
+        Drive the animation with the band-pass filtered PC trajectories (paper 5.2).
+    clamp : bool
+        Clamp the RBF weights to [0, 1] (paper 2.4).
+    loop : bool
+        Play and export one gait cycle, cut at the detected period and closed on itself.
+    """
+
+    filtered: bool = False
+    clamp: bool = False
+    loop: bool = False
+
+
+@dataclass(frozen=True)
 class Project:
     """Everything the artist made on one clip.
 
@@ -118,6 +137,8 @@ class Project:
         The rig being posed; None means the bundled ``horse`` template.
     silhouettes : Silhouettes or None
         The tracked silhouettes, once segmented, sketched or read from masks.
+    animation : AnimationOptions
+        How the preview and the exports animate the keys.
     """
 
     footage: Path | None = None
@@ -132,6 +153,7 @@ class Project:
     key_poses: Mapping[int, tuple[float, ...]] = field(default_factory=dict)
     silhouettes: Silhouettes | None = None
     skeleton: Skeleton | None = None
+    animation: AnimationOptions = field(default_factory=AnimationOptions)
 
     def __post_init__(self) -> None:
         if self.footage is not None:

@@ -3,7 +3,8 @@
 One curve w_i(t) per posed frame (each key a colour, its alternate the same colour dashed)
 and their sum (black, dotted), a vertical line at the current frame, a dot on each curve at its own frame (where it
 is 1). Check boxes drive the preview and the export: band-pass filtered trajectories, clamped
-weights, one looping cycle. Clicking the plot goes to that frame.
+weights, one looping cycle; they are the project's options (saved with it, each change one
+undo step). Clicking the plot goes to that frame.
 """
 
 from __future__ import annotations
@@ -56,6 +57,8 @@ class AnimationView(QWidget):
         layout.addWidget(self.plot, 1)
         layout.addWidget(self.status)
 
+        self._show_options()
+        state.projectChanged.connect(self._show_options)
         controller.animationChanged.connect(self._show)
         state.analysisChanged.connect(self._set_range)
         controller.statusChanged.connect(self.status.setText)
@@ -69,6 +72,16 @@ class AnimationView(QWidget):
         if n:
             self.plot.setXRange(0, n - 1, padding=0.01)
             self.plot.setYRange(-0.2, 1.2, padding=0)
+
+    def _show_options(self, *_changed) -> None:
+        """Tick the boxes as the project says (after an undo, or a project opened)."""
+        options = self._controller.options
+        for box, value in ((self.filtered, options.filtered), (self.clamp, options.clamp),
+                           (self.loop, options.loop)):
+            if box.isChecked() != value:
+                box.blockSignals(True)
+                box.setChecked(value)
+                box.blockSignals(False)
 
     def _on_options(self, *_checked) -> None:
         options = replace(self._controller.options, filtered=self.filtered.isChecked(),

@@ -26,7 +26,7 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 from gaitcore.model import Rect, Stroke
 from gaitcore.pipeline import AnalysisSettings
-from gaitcore.project import Project, Silhouettes
+from gaitcore.project import AnimationOptions, Project, Silhouettes
 from gaitcore.silhouette import RoiClip
 from gaitcore.skeleton import Skeleton
 
@@ -145,6 +145,7 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
         "key_poses": {str(k): list(v) for k, v in sorted(project.key_poses.items())},
         "skeleton": None if project.skeleton is None else project.skeleton.to_dict(),
         "silhouettes": sil,
+        "animation": asdict(project.animation),
     }
 
 
@@ -176,7 +177,19 @@ def _from_json(doc: dict, p: Path) -> Project:
         key_poses={int(k): tuple(v) for k, v in doc["key_poses"].items()},
         silhouettes=None if sil is None else _read_silhouettes(sil, sidecar_dir(p)),
         skeleton=None if doc.get("skeleton") is None else Skeleton.from_json(doc["skeleton"]),
+        animation=_animation_options(doc.get("animation", {})),
     )
+
+
+def _animation_options(entry: dict) -> AnimationOptions:
+    """The "animation" entry (absent in projects saved before it existed: defaults)."""
+    if not isinstance(entry, dict):
+        raise TypeError(f"animation options must be an object, got {entry!r}")
+    known = AnimationOptions.__dataclass_fields__
+    options = {k: v for k, v in entry.items() if k in known}
+    if not all(isinstance(v, bool) for v in options.values()):
+        raise TypeError(f"animation options must be true or false, got {entry!r}")
+    return AnimationOptions(**options)
 
 
 def _read_doc(p: Path) -> dict:

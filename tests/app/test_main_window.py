@@ -166,6 +166,8 @@ def test_save_reopen_gives_the_same_project(qtbot, make_window, asker, canter_cl
     first.pc_plot.pcs.setValue(3)
     first.state.set_frame(20)
     first.pc_plot.pin.click()
+    first.animation_view.loop.setChecked(True)
+    first.animation_view.clamp.setChecked(True)
     asker.next_save_path = tmp_path / "horse.gaitproj"
     assert first.documents.save()
     assert first.state.undo_stack.isClean() and not first.isWindowModified()
@@ -177,6 +179,9 @@ def test_save_reopen_gives_the_same_project(qtbot, make_window, asker, canter_cl
     wait_ready(qtbot, second)
     assert second.state.project == saved
     assert second.state.analysis.settings.pcs == 3 and 20 in second.state.analysis.key_frames
+    view = second.animation_view
+    assert view.loop.isChecked() and view.clamp.isChecked() and not view.filtered.isChecked()
+    assert second.animator.options.loop
     assert str(tmp_path / "horse.gaitproj") in second.documents.recent_files()[0]
 
 

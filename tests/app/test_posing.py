@@ -97,6 +97,12 @@ def test_filtered_and_clamped_options_match_the_command_line_too(qtbot, window, 
     loop_csv = export_from_app(qtbot, window, asker, tmp_path / "loop.csv")
     assert len(read_pose_table(loop_csv).frames) == period
 
+    # each option change is one undo step, and undo unticks its box
+    window.state.undo_stack.undo()
+    assert not window.animation_view.loop.isChecked() and window.animator.options.clamp
+    window.animator.recompute()
+    assert window.animator.animation.cycle is None
+
 
 def test_spin_box_changes_of_one_joint_are_one_undo_step(qtbot, window, canter_clip):
     open_demo(qtbot, window, canter_clip)

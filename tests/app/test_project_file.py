@@ -13,7 +13,7 @@ from gaitcore.io.project_file import (
 )
 from gaitcore.model import Rect, Stroke
 from gaitcore.pipeline import AnalysisSettings
-from gaitcore.project import Project, Silhouettes
+from gaitcore.project import AnimationOptions, Project, Silhouettes
 from gaitcore.silhouette import RoiClip
 
 
@@ -30,6 +30,7 @@ def make_project(footage) -> Project:
         settings=AnalysisSettings(pcs=3, keys=5, switching=True, pinned=(1,), forbidden=(4, 5)),
         alternates=(3, 5), key_poses={2: (1.0, -2.5)},
         silhouettes=Silhouettes(roi, "segmented"),
+        animation=AnimationOptions(filtered=True, loop=True),
     )
 
 
@@ -138,3 +139,16 @@ def test_the_posed_skeleton_and_poses_survive_a_round_trip(tmp_path):
     assert project.with_pose(7, None).key_poses == {}
     with pytest.raises(GaitInputError):
         project.with_pose(3, [1.0, float("nan")])
+
+
+def test_animation_options_default_for_older_files_and_are_checked(tmp_path):
+    save_project(Project(), tmp_path / "p.gaitproj")
+    doc = json.loads((tmp_path / "p.gaitproj").read_text())
+    assert doc["animation"] == {"filtered": False, "clamp": False, "loop": False}
+    del doc["animation"]  # saved before the options were kept
+    (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
+    assert load_project(tmp_path / "p.gaitproj").animation == AnimationOptions()
+    doc["animation"] = {"loop": "yes"}
+    (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
+    with pytest.raises(GaitInputError, match="damaged"):
+        load_project(tmp_path / "p.gaitproj")
