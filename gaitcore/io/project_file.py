@@ -2,7 +2,8 @@
 
 ``horse.gaitproj`` holds everything small (footage path, rectangles, strokes, settings, keys)
 as JSON with ``"format"`` and ``"version"``; ``horse.gaitproj.d/`` beside it holds the
-silhouette arrays as ``.npy`` files named after their content. Saving is atomic: arrays are
+silhouette arrays as ``.npy`` files named after their content (the crops packed 8 pixels to a
+byte since version 2; version 1 files, with one byte per pixel, are still read). Saving is atomic: arrays are
 written first (temporary file, fsync, rename), then the JSON the same way, then arrays no
 longer referenced are removed, so a crash at any point leaves a readable project.
 
@@ -31,9 +32,9 @@ from gaitcore.silhouette import RoiClip
 from gaitcore.skeleton import Skeleton
 
 FORMAT = "gaitstudio-project"
-VERSION = 1
+VERSION = 2
 SUFFIX = ".gaitproj"
-_ARRAY_NAME = re.compile(r"^(crops|centers_xy|lost)-[0-9a-f]{16}\.npy$")
+_ARRAY_NAME = re.compile(r"^(crops|crops_packed|centers_xy|lost)-[0-9a-f]{16}\.npy$")
 
 
 def sidecar_dir(path: str | os.PathLike) -> Path:
@@ -121,11 +122,13 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
     if project.silhouettes is not None:
         roi = project.silhouettes.roi
         arrays = {
-            "crops": _write_array(side, "crops", np.ascontiguousarray(roi.crops, dtype=bool)),
+            "crops_packed": _write_array(side, "crops_packed",
+                                         np.packbits(np.asarray(roi.crops, dtype=bool), axis=-1)),
             "centers_xy": _write_array(side, "centers_xy", np.asarray(roi.centers_xy, dtype=np.float64)),
             "lost": _write_array(side, "lost", np.asarray(roi.lost, dtype=bool)),
         }
-        sil = {"origin": project.silhouettes.origin, "scale": float(roi.scale), "arrays": arrays}
+        sil = {"origin": project.silhouettes.origin, "scale": float(roi.scale),
+               "crops_shape": list(roi.crops.shape), "arrays": arrays}
     return {
         "format": FORMAT,
         "version": VERSION,
@@ -248,7 +251,15 @@ def _write_array(side: Path, stem: str, arr: np.ndarray) -> str:
 
 def _read_silhouettes(sil: dict, side: Path) -> Silhouettes:
     arrays = sil["arrays"]
-    crops = _read_array(side, arrays["crops"], "b", 3)
+    if "crops_packed" in arrays:  # version 2
+        n, rows, cols = (int(v) for v in sil["crops_shape"])
+        packed = _read_array(side, arrays["crops_packed"], "u", 3)
+        if packed.dtype != np.uint8 or packed.shape != (n, rows, -(-cols // 8)):
+            raise GaitInputError(f"{side / arrays['crops_packed']} does not hold {n} crops of "
+                                 f"{rows} x {cols} pixels: the project is damaged")
+        crops = np.unpackbits(packed, axis=-1, count=cols).view(bool)
+    else:
+        crops = _read_array(side, arrays["crops"], "b", 3)
     centers = _read_array(side, arrays["centers_xy"], "f", 2)
     lost = _read_array(side, arrays["lost"], "b", 1)
     roi = RoiClip(crops=crops, centers_xy=centers, lost=lost, scale=float(sil["scale"]))

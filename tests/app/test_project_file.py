@@ -97,9 +97,41 @@ def test_a_newer_project_is_never_overwritten(tmp_path):
 def test_pickled_arrays_are_refused(tmp_path):
     path = tmp_path / "p.gaitproj"
     save_project(make_project(None), path)
-    crops = json.loads(path.read_text())["silhouettes"]["arrays"]["crops"]
+    crops = json.loads(path.read_text())["silhouettes"]["arrays"]["crops_packed"]
     np.save(sidecar_dir(path) / crops, np.array([{"evil": 1}], dtype=object), allow_pickle=True)
     with pytest.raises(GaitInputError, match="damaged"):
+        load_project(path)
+
+
+def test_crops_are_packed_and_version_1_files_still_open(tmp_path):
+    path = tmp_path / "p.gaitproj"
+    project = make_project(None)
+    save_project(project, path)
+    doc = json.loads(path.read_text())
+    assert doc["version"] == 2 and doc["silhouettes"]["crops_shape"] == [6, 9, 7]
+    packed = np.load(sidecar_dir(path) / doc["silhouettes"]["arrays"]["crops_packed"])
+    assert packed.shape == (6, 9, 1) and packed.dtype == np.uint8
+    # the same project as Gait Studio 1 wrote it: one byte per pixel
+    old = dict(doc, version=1)
+    old["silhouettes"] = {k: v for k, v in doc["silhouettes"].items() if k != "crops_shape"}
+    old["silhouettes"]["arrays"] = dict(doc["silhouettes"]["arrays"])
+    del old["silhouettes"]["arrays"]["crops_packed"]
+    old["silhouettes"]["arrays"]["crops"] = "crops-0123456789abcdef.npy"
+    np.save(sidecar_dir(path) / "crops-0123456789abcdef.npy", project.silhouettes.roi.crops)
+    v1 = tmp_path / "v1.gaitproj"
+    v1.write_text(json.dumps(old))
+    sidecar_dir(path).rename(sidecar_dir(v1))
+    np.testing.assert_array_equal(load_project(v1).silhouettes.roi.crops,
+                                  project.silhouettes.roi.crops)
+
+
+def test_packed_crops_of_the_wrong_size_are_refused(tmp_path):
+    path = tmp_path / "p.gaitproj"
+    save_project(make_project(None), path)
+    doc = json.loads(path.read_text())
+    doc["silhouettes"]["crops_shape"] = [6, 9, 17]
+    path.write_text(json.dumps(doc))
+    with pytest.raises(GaitInputError, match="does not hold 6 crops of 9 x 17 pixels"):
         load_project(path)
 
 
