@@ -18,7 +18,8 @@ from app.state import AppState
 from app.workers import Job, JobRunner, ProgressDialog
 from gaitcore.errors import GaitInputError
 from gaitcore.footage import is_mask_folder
-from gaitcore.frames import FrameSource, open_frames, read_mask_folder
+from gaitcore.frames import FrameSource, open_frames
+from gaitcore.image_folder import read_mask_folder
 from gaitcore.io.project_file import SUFFIX, load_project, missing_footage, save_project
 from gaitcore.project import Project, Silhouettes
 from gaitcore.silhouette import crop_rois

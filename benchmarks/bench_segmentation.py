@@ -24,7 +24,8 @@ import cv2
 import numpy as np
 
 from benchmarks import Section
-from gaitcore.frames import open_frames, read_mask_folder
+from gaitcore.frames import open_frames
+from gaitcore.image_folder import read_mask_folder
 from gaitcore.model import Rect
 from gaitcore.segmentation import segment_clip
 

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from gaitcore.errors import GaitInputError
-from gaitcore.frames import iter_mask_folder, list_image_files
+from gaitcore.image_folder import iter_mask_folder, list_image_files
 from gaitcore.model import Rect
 from gaitcore.silhouette import RoiClip, crop_rois
 

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from gaitcore.errors import GaitInputError
-from gaitcore.frames import open_frames, read_mask_folder
+from gaitcore.frames import open_frames
+from gaitcore.image_folder import read_mask_folder
 from gaitcore.model import Rect
 from gaitcore.segmentation import (
     ColourModel,
