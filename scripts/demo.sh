@@ -12,15 +12,16 @@ export PYOPENGL_PLATFORM="${PYOPENGL_PLATFORM:-egl}"
     --out "$out/curves.csv" --bvh "$out/canter.bvh" --skeleton "$out/clip/skeleton.json"
 "$bin/python" scripts/demo_pose_keys.py --compare "$out/curves.csv" "$out/clip/poses.csv" "$out/clip/skeleton.json"
 echo "headless run written to $out (curves.csv, canter.bvh, analysis/analysis.json, clip/images)"
-# Then the application on the same kind of clip: a window when there is a display, else a
-# screenshot of the loaded main window.
+# Then the application on the same clip, keys posed, the animation ready: a window when
+# there is a display, else a screenshot of the loaded main window.
+"$bin/python" scripts/demo_pose_keys.py --project "$out/clip" "$out/keys.csv" "$out/canter.gaitproj"
 if [ -n "${DISPLAY:-}" ] || [ -n "${WAYLAND_DISPLAY:-}" ]; then
-    "$bin/gaitstudio" --demo
+    "$bin/gaitstudio" "$out/canter.gaitproj"
 elif command -v xvfb-run >/dev/null 2>&1; then
     # A virtual display gives the 3D viewport an OpenGL context too.
-    xvfb-run -a -s "-screen 0 1600x1000x24" "$bin/gaitstudio" --demo --screenshot "$out/gaitstudio.png"
+    xvfb-run -a -s "-screen 0 1600x1000x24" "$bin/gaitstudio" "$out/canter.gaitproj" --screenshot "$out/gaitstudio.png"
     echo "no display: saved the Gait Studio window to $out/gaitstudio.png"
 else
-    QT_QPA_PLATFORM=offscreen "$bin/gaitstudio" --demo --screenshot "$out/gaitstudio.png"
+    QT_QPA_PLATFORM=offscreen "$bin/gaitstudio" "$out/canter.gaitproj" --screenshot "$out/gaitstudio.png"
     echo "no display: saved the Gait Studio window to $out/gaitstudio.png"
 fi

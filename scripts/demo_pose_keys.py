@@ -1,8 +1,9 @@
-"""Demo helper: stand in for the artist by posing the key-images with the true poses, and
-compare the animation with the truth afterwards.
+"""Demo helper: stand in for the artist by posing the key-images with the true poses,
+compare the animation with the truth afterwards, and save it all as a Gait Studio project.
 
     python scripts/demo_pose_keys.py ANALYSIS.json POSES.csv KEYS.csv
     python scripts/demo_pose_keys.py --compare CURVES.csv POSES.csv SKELETON.json
+    python scripts/demo_pose_keys.py --project CLIP_DIR KEYS.csv OUT.gaitproj
 """
 
 from __future__ import annotations
@@ -13,8 +14,10 @@ import sys
 import numpy as np
 
 from gaitcore.evaluate import angle_error_deg
-from gaitcore.io.pose_table import PoseTable, read_pose_table, write_pose_table
+from gaitcore.io.pose_table import PoseTable, pose_matrix, read_pose_table, write_pose_table
 from gaitcore.skeleton import Skeleton
+
+DEMO_FPS = 25.0
 
 
 def pose_keys(analysis_path: str, poses_path: str, out_path: str) -> None:
@@ -34,8 +37,32 @@ def compare(curves_path: str, poses_path: str, skeleton_path: str) -> None:
           f"std {err.std():.2f} deg over {len(idx)} angles x {len(truth.frames)} frames")
 
 
+def save_project(clip: str, keys_path: str, out_path: str) -> None:
+    """The clip, its silhouettes (made as the app makes them) and the posed keys, as a project
+    the app opens with the animation ready."""
+    from pathlib import Path
+
+    from app.document import silhouettes_from_masks
+    from gaitcore.io.project_file import save_project as write_project
+    from gaitcore.project import Project
+
+    clip_dir = Path(clip).absolute()
+    skeleton = Skeleton.from_json(clip_dir / "skeleton.json")
+    keys = read_pose_table(keys_path)
+    poses = pose_matrix(skeleton, keys)
+    project = Project(
+        footage=clip_dir / "images", fps=DEMO_FPS, skeleton=skeleton,
+        silhouettes=silhouettes_from_masks(clip_dir / "masks", None),
+        key_poses={int(f): tuple(map(float, row)) for f, row in zip(keys.frames, poses)},
+    )
+    write_project(project, out_path)
+    print(f"wrote the project {out_path} (keys {list(map(int, keys.frames))} posed)")
+
+
 if __name__ == "__main__":
     if sys.argv[1] == "--compare":
         compare(*sys.argv[2:5])
+    elif sys.argv[1] == "--project":
+        save_project(*sys.argv[2:5])
     else:
         pose_keys(*sys.argv[1:4])
