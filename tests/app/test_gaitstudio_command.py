@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import subprocess
@@ -10,6 +11,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import pytest
+
+from gaitcore.io.project_file import load_project
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -68,3 +72,21 @@ def test_demo_screenshot_on_x11_shows_the_3d_viewport(tmp_path, artifacts_dir):
 
     dark = np.all(np.abs(image.astype(int) - BACKGROUND_RGB[::-1]) < 8, axis=2)
     assert dark.mean() > 0.03
+
+
+@pytest.mark.slow
+def test_the_demo_script_ends_in_the_app_on_its_posed_project(tmp_path, artifacts_dir):
+    """What `make demo` runs once the .venv exists (headless: a screenshot, not a window)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env.update(XDG_CACHE_HOME=str(tmp_path / "cache"), XDG_CONFIG_HOME=str(tmp_path / "config"))
+    out = tmp_path / "demo"
+    run = subprocess.run(["sh", "scripts/demo.sh", str(Path(sys.executable).parent), str(out)],
+                         cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "mean |error|" in run.stdout
+    project = load_project(out / "canter.gaitproj")
+    analysis = json.loads((out / "analysis" / "analysis.json").read_text())
+    assert sorted(project.key_poses) == sorted(analysis["key_frames"])
+    shot = cv2.imread(str(out / "gaitstudio.png"))
+    assert shot is not None and shot.std() > 10
+    shutil.copy(out / "gaitstudio.png", artifacts_dir / "make_demo.png")
