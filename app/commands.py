@@ -14,9 +14,10 @@ from PySide6.QtGui import QUndoCommand
 from app.state import AppState
 from gaitcore.model import Rect, Stroke
 from gaitcore.pipeline import AnalysisSettings
-from gaitcore.project import AnimationOptions, Project, Silhouettes
+from gaitcore.project import AnimationOptions, FootageFit, Project, Silhouettes
 
 _SETTINGS_ID = 1001
+_FOOTAGE_FIT_ID = 1002
 
 
 class ProjectCommand(QUndoCommand):
@@ -112,21 +113,44 @@ class ClearKeyConstraintsCommand(ProjectCommand):
         super().__init__(state, replace(state.project, settings=settings), "clear pinned and dropped keys")
 
 
-class ChangeSettingsCommand(ProjectCommand):
-    """Change the analysis settings; consecutive changes of one field merge into one step."""
+class _FieldCommand(ProjectCommand):
+    """A change of one field of a project part; consecutive changes of that field (a spin box
+    held down) merge into one undo step."""
 
-    def __init__(self, state: AppState, settings: AnalysisSettings, field_name: str) -> None:
-        super().__init__(state, replace(state.project, settings=settings), f"change {field_name}")
+    _ID = 0
+
+    def __init__(self, state: AppState, after: Project, field_name: str, text: str) -> None:
+        super().__init__(state, after, text)
         self._field = field_name
 
     def id(self) -> int:
-        return _SETTINGS_ID
+        return self._ID
 
     def mergeWith(self, other: QUndoCommand) -> bool:
-        if not isinstance(other, ChangeSettingsCommand) or other._field != self._field:
+        if type(other) is not type(self) or other._field != self._field:
             return False
         self._after = other._after
         return True
+
+
+class ChangeSettingsCommand(_FieldCommand):
+    """Change the analysis settings (one field)."""
+
+    _ID = _SETTINGS_ID
+
+    def __init__(self, state: AppState, settings: AnalysisSettings, field_name: str) -> None:
+        super().__init__(state, replace(state.project, settings=settings), field_name,
+                         f"change {field_name}")
+
+
+class FootageFitCommand(_FieldCommand):
+    """Scale, shift or mirror the footage behind the skeleton (one field)."""
+
+    _ID = _FOOTAGE_FIT_ID
+
+    def __init__(self, state: AppState, fit: FootageFit, field_name: str) -> None:
+        super().__init__(state, replace(state.project, footage_fit=fit), field_name,
+                         f"change footage {field_name}")
 
 
 class AcceptAlternatesCommand(ProjectCommand):

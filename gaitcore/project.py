@@ -109,6 +109,41 @@ class AnimationOptions:
 
 
 @dataclass(frozen=True)
+class FootageFit:
+    """How the footage sits behind the skeleton in the 3D viewport, set by the artist.
+
+    The automatic placement scales the frame so that the median silhouette height equals
+    the skeleton's height and puts the silhouette's centre on the skeleton's centre; these
+    correct it.
+
+    Attributes
+    ----------
+    scale : float
+        Size of the footage relative to the automatic placement (1: unchanged), > 0.
+    offset_x_m, offset_y_m : float
+        Shift of the footage along the direction of travel and up, metres.
+    flip : bool
+        Mirror the footage left-right (an animal moving to the left).
+
+    Raises
+    ------
+    GaitInputError
+        For a scale that is not a positive number or a non-finite offset.
+    """
+
+    scale: float = 1.0
+    offset_x_m: float = 0.0
+    offset_y_m: float = 0.0
+    flip: bool = False
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.scale) and self.scale > 0):
+            raise GaitInputError(f"footage scale must be a positive number, got {self.scale}")
+        if not (np.isfinite(self.offset_x_m) and np.isfinite(self.offset_y_m)):
+            raise GaitInputError("footage offsets must be finite numbers of metres")
+
+
+@dataclass(frozen=True)
 class Project:
     """Everything the artist made on one clip.
 
@@ -139,6 +174,8 @@ class Project:
         The tracked silhouettes, once segmented, sketched or read from masks.
     animation : AnimationOptions
         How the preview and the exports animate the keys.
+    footage_fit : FootageFit
+        How the footage sits behind the skeleton while posing.
     """
 
     footage: Path | None = None
@@ -154,6 +191,7 @@ class Project:
     silhouettes: Silhouettes | None = None
     skeleton: Skeleton | None = None
     animation: AnimationOptions = field(default_factory=AnimationOptions)
+    footage_fit: FootageFit = field(default_factory=FootageFit)
 
     def __post_init__(self) -> None:
         if self.footage is not None:

@@ -3,8 +3,10 @@
 On a frame to pose (a key-image or an accepted alternate) it shows that frame's pose, and
 clicking a joint selects it, dragging from it rotates it about the view axis (one undo step
 per drag). On any other frame it shows the animation predicted for that frame, so playback
-moves the skeleton in step with the footage, which is drawn on a plane behind it. Side, front
-and top buttons reset the camera; orbit, pan and zoom are pyqtgraph's.
+moves the skeleton in step with the footage, which is drawn on a plane behind it, placed
+automatically and corrected by the artist (size, shift, mirror: the project's footage fit, each
+change one undo step). Side, front and top buttons reset the camera; orbit, pan and zoom are
+pyqtgraph's.
 
 Without OpenGL (Qt's offscreen platform) the viewport says so and everything else works: the
 posing panel needs no GL.
@@ -12,13 +14,17 @@ posing panel needs no GL.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Callable
 
 import numpy as np
 from PySide6.QtCore import Qt, QTimer
-from PySide6.QtWidgets import QCheckBox, QHBoxLayout, QLabel, QToolButton, QVBoxLayout, QWidget
+from PySide6.QtWidgets import (
+    QCheckBox, QDoubleSpinBox, QHBoxLayout, QLabel, QToolButton, QVBoxLayout, QWidget,
+)
 
 from app.animation import AnimationController
+from app.commands import FootageFitCommand
 from app.posing import PosingController
 from app.state import AppState
 from app.widgets.reference_plane import (
@@ -26,7 +32,7 @@ from app.widgets.reference_plane import (
 )
 from app.widgets.skeleton_gl import SkeletonGLView, opengl_available
 from app.workers import FrameLoader
-from gaitcore.project import Silhouettes
+from gaitcore.project import FootageFit, Silhouettes
 from gaitcore.skeleton import Skeleton
 
 VIEW_MARGIN = 1.35
@@ -86,9 +92,22 @@ class PoseViewport(QWidget):
         bar.addWidget(self.footage)
         bar.addWidget(self.flip)
         bar.addStretch(1)
+        self.fit_scale = _spin("Footage size relative to the automatic fit", " %", 20, 500, 5)
+        self.fit_x = _spin("Shift the footage along the direction of travel", " cm", -300, 300, 1,
+                           prefix="x ")
+        self.fit_y = _spin("Shift the footage up", " cm", -300, 300, 1, prefix="y ")
+        self.fit_auto = QToolButton()
+        self.fit_auto.setText("Auto")
+        self.fit_auto.setToolTip("Back to the automatic fit (silhouette height and centre)")
+        fit_bar = QHBoxLayout()
+        fit_bar.addWidget(QLabel("Fit"))
+        for widget in (self.fit_scale, self.fit_x, self.fit_y, self.fit_auto):
+            fit_bar.addWidget(widget)
+        fit_bar.addStretch(1)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addLayout(bar)
+        layout.addLayout(fit_bar)
         self.gl_view: SkeletonGLView | None = None
         self.gl_container: QWidget | None = None
         if opengl_available():
@@ -109,12 +128,19 @@ class PoseViewport(QWidget):
         loader.frameLoaded.connect(self._on_frame_loaded)
         state.frameChanged.connect(self.refresh)
         state.projectChanged.connect(self.refresh)
+        state.projectChanged.connect(self._show_fit)
         state.analysisChanged.connect(self.refresh)
         state.sourceChanged.connect(self._forget_image)
         state.selectedJointChanged.connect(self._show_selected)
         animation.animationChanged.connect(self.refresh)
         self.footage.toggled.connect(self._update_reference)
-        self.flip.toggled.connect(self._update_reference)
+        self.flip.toggled.connect(lambda on: self._edit_fit("flip", flip=on))
+        self.fit_scale.valueChanged.connect(lambda v: self._edit_fit("scale", scale=v / 100))
+        self.fit_x.valueChanged.connect(lambda v: self._edit_fit("shift", offset_x_m=v / 100))
+        self.fit_y.valueChanged.connect(lambda v: self._edit_fit("shift", offset_y_m=v / 100))
+        self.fit_auto.clicked.connect(self._auto_fit)
+        self._fit = FootageFit()
+        self._show_fit()
         self.refresh()
 
     # -- camera ------------------------------------------------------------------------------
@@ -206,8 +232,8 @@ class PoseViewport(QWidget):
         if silhouettes is not self._sil[0]:
             self._sil = (silhouettes, None if silhouettes is None else silhouette_height_px(silhouettes))
         index, bgr = self._image
-        ref = reference_image(bgr, index, self._extent, silhouettes, flip=self.flip.isChecked(),
-                              height_px=self._sil[1])
+        ref = reference_image(bgr, index, self._extent, silhouettes,
+                              fit=self._state.project.footage_fit, height_px=self._sil[1])
         self._ref = ref
         self.gl_view.set_reference(ref.rgba_xy, self._shifted(ref.transform))
 
@@ -216,7 +242,34 @@ class PoseViewport(QWidget):
         shift[0, 3] = self._dx
         return shift @ transform
 
+    def _show_fit(self, *_changed) -> None:
+        """Show the project's footage fit in the controls and on the plane."""
+        fit = self._state.project.footage_fit
+        for widget, value in ((self.fit_scale, 100 * fit.scale), (self.fit_x, 100 * fit.offset_x_m),
+                              (self.fit_y, 100 * fit.offset_y_m)):
+            if widget.value() != value:
+                widget.blockSignals(True)
+                widget.setValue(value)
+                widget.blockSignals(False)
+        if self.flip.isChecked() != fit.flip:
+            self.flip.blockSignals(True)
+            self.flip.setChecked(fit.flip)
+            self.flip.blockSignals(False)
+        if fit != self._fit:
+            self._fit = fit
+            self._update_reference()
+
     # -- view -> edits -----------------------------------------------------------------------
+    def _edit_fit(self, field_name: str, **change) -> None:
+        fit = replace(self._state.project.footage_fit, **change)
+        if fit != self._state.project.footage_fit:
+            self._state.undo_stack.push(FootageFitCommand(self._state, fit, field_name))
+
+    def _auto_fit(self) -> None:
+        fit = FootageFit(flip=self._state.project.footage_fit.flip)
+        if fit != self._state.project.footage_fit:
+            self._state.undo_stack.push(FootageFitCommand(self._state, fit, "fit (automatic)"))
+
     def _on_joint_pressed(self, joint: int) -> None:
         self._state.set_selected_joint(self._state.skeleton.joint_names[joint])
         frame = self._posing.editable_frame()
@@ -226,3 +279,16 @@ class PoseViewport(QWidget):
     def _on_joint_dragged(self, joint: int, angle_deg: float) -> None:
         if self._base_pose is not None and self.gl_view is not None:
             self._posing.rotate_joint(joint, self._base_pose, self.gl_view.view_axis(), angle_deg)
+
+
+def _spin(tip: str, suffix: str, low: float, high: float, step: float, *,
+          prefix: str = "") -> QDoubleSpinBox:
+    box = QDoubleSpinBox()
+    box.setDecimals(0)
+    box.setRange(low, high)
+    box.setSingleStep(step)
+    box.setPrefix(prefix)
+    box.setSuffix(suffix)
+    box.setToolTip(tip)
+    box.setKeyboardTracking(False)
+    return box

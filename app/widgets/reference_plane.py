@@ -4,7 +4,8 @@ The footage is a plane in gaitcore's XY plane, behind the skeleton (negative Z, 
 side camera). Its scale makes the median height of the tracked silhouettes equal to the
 skeleton's rest height, and the silhouette's centre of mass in the shown frame (the ROI
 centre, paper Section 2.2) lands on the skeleton's centre (area-weighted centre of its bone
-ellipsoids seen from the side). Only the part of the frame around the subject is uploaded,
+ellipsoids seen from the side); the project's :class:`~gaitcore.project.FootageFit` corrects
+that placement (scale about the anchor, shift, mirror). Only the part of the frame around the subject is uploaded,
 shrunk to at most :data:`MAX_TEXTURE_SIDE` pixels.
 """
 
@@ -15,7 +16,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from gaitcore.project import Silhouettes
+from gaitcore.project import FootageFit, Silhouettes
 from gaitcore.skeleton import Skeleton
 
 MAX_TEXTURE_SIDE = 512
@@ -95,7 +96,7 @@ class ReferenceImage:
 
 
 def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
-                    silhouettes: Silhouettes | None, *, flip: bool = False,
+                    silhouettes: Silhouettes | None, *, fit: FootageFit = FootageFit(),
                     height_px: float | None = None) -> ReferenceImage:
     """Crop, shrink and place footage frame ``bgr`` (source pixels) behind the skeleton.
 
@@ -106,8 +107,9 @@ def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
         Clip frame of ``bgr`` (its silhouette gives the anchor).
     skeleton : SkeletonExtent
     silhouettes : Silhouettes or None
-    flip : bool
-        Mirror the footage left-right (for an animal moving towards -X in the clip).
+    fit : FootageFit
+        The artist's correction of the automatic placement: scale about the anchor, shift,
+        left-right mirror (for an animal moving towards -X in the clip).
     height_px : float, optional
         :func:`silhouette_height_px` of ``silhouettes``, when already computed.
     """
@@ -143,10 +145,10 @@ def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
     rgba[..., :3] = crop[..., ::-1] * (1 - WASH_OUT) + 255 * WASH_OUT
     rgba[..., 3] = 255
     data = np.ascontiguousarray(rgba[::-1].transpose(1, 0, 2))
-    sign = -1.0 if flip else 1.0
-    s, t = metres_per_px, texel_px
+    sign = -1.0 if fit.flip else 1.0
+    s, t = metres_per_px * fit.scale, texel_px
     tex_h = crop.shape[0]
-    X0, Y0 = skeleton.center_xy
+    X0, Y0 = skeleton.center_xy[0] + fit.offset_x_m, skeleton.center_xy[1] + fit.offset_y_m
     transform = np.array([
         [sign * t * s, 0, 0, X0 + sign * (x0 - u0) * s],
         [0, t * s, 0, Y0 - (y0 + tex_h * t - v0) * s],

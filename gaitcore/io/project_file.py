@@ -27,7 +27,7 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 from gaitcore.model import Rect, Stroke
 from gaitcore.pipeline import AnalysisSettings
-from gaitcore.project import AnimationOptions, Project, Silhouettes
+from gaitcore.project import AnimationOptions, FootageFit, Project, Silhouettes
 from gaitcore.silhouette import RoiClip
 from gaitcore.skeleton import Skeleton
 
@@ -149,6 +149,7 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
         "skeleton": None if project.skeleton is None else project.skeleton.to_dict(),
         "silhouettes": sil,
         "animation": asdict(project.animation),
+        "footage_fit": asdict(project.footage_fit),
     }
 
 
@@ -181,7 +182,24 @@ def _from_json(doc: dict, p: Path) -> Project:
         silhouettes=None if sil is None else _read_silhouettes(sil, sidecar_dir(p)),
         skeleton=None if doc.get("skeleton") is None else Skeleton.from_json(doc["skeleton"]),
         animation=_animation_options(doc.get("animation", {})),
+        footage_fit=_footage_fit(doc.get("footage_fit", {})),
     )
+
+
+def _footage_fit(entry: dict) -> FootageFit:
+    """The "footage_fit" entry (absent in older projects: the automatic placement)."""
+    if not isinstance(entry, dict):
+        raise TypeError(f"footage fit must be an object, got {entry!r}")
+    known = FootageFit.__dataclass_fields__
+    fit = {k: v for k, v in entry.items() if k in known}
+    if not isinstance(fit.get("flip", False), bool) or not all(
+            isinstance(fit.get(k, 0.0), (int, float)) and not isinstance(fit.get(k, 0.0), bool)
+            for k in ("scale", "offset_x_m", "offset_y_m")):
+        raise TypeError(f"footage fit has values of the wrong type: {entry!r}")
+    try:
+        return FootageFit(**fit)
+    except GaitInputError as exc:  # reported as a damaged file, like every bad entry
+        raise ValueError(str(exc)) from None
 
 
 def _animation_options(entry: dict) -> AnimationOptions:

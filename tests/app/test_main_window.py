@@ -6,6 +6,7 @@ import time
 from dataclasses import replace
 
 import numpy as np
+import pytest
 from PySide6.QtCore import QPoint, QTimer, Qt
 from PySide6.QtWidgets import QApplication, QPushButton
 
@@ -265,3 +266,25 @@ def test_a_long_analysis_shows_its_progress_and_cancel_stops_it(qtbot, window, m
     qtbot.waitUntil(lambda: not window.analysis.running, timeout=5000)
     assert time.monotonic() - started < 1.0  # stopped at the next chunk, not at the end
     assert window.state.analysis is None
+
+
+def test_the_footage_fit_is_one_undo_step_per_control_and_kept_in_the_project(qtbot, window,
+                                                                                 canter_clip):
+    assert window.open_path(canter_clip / "masks")
+    wait_ready(qtbot, window)
+    viewport, stack = window.viewport, window.state.undo_stack
+    before = stack.count()
+    viewport.fit_scale.stepUp()
+    viewport.fit_scale.stepUp()
+    viewport.fit_x.setValue(12)
+    viewport.flip.setChecked(True)
+    fit = window.state.project.footage_fit
+    assert (fit.scale, fit.offset_x_m, fit.offset_y_m, fit.flip) == (pytest.approx(1.1),
+                                                                      pytest.approx(0.12), 0, True)
+    assert stack.count() == before + 3  # the two size steps merged
+    stack.undo()
+    stack.undo()
+    assert window.state.project.footage_fit.offset_x_m == 0 and viewport.fit_x.value() == 0
+    assert not viewport.flip.isChecked() and viewport.fit_scale.value() == 110
+    viewport.fit_auto.click()
+    assert window.state.project.footage_fit.scale == 1.0 and viewport.fit_scale.value() == 100

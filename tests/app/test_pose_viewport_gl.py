@@ -65,6 +65,11 @@ def test_the_skeleton_is_drawn_over_the_key_image(qtbot, window, posed_key, arti
     # ... and the skeleton stays in front of it.
     spine = screen[skeleton.joint_index("spine2")]
     np.testing.assert_array_equal(pixel_at(view, with_footage, spine), pixel_at(view, bare, spine))
+    # The artist's fit reaches the plane: half again as big, same anchor.
+    auto = window.viewport._ref.transform.copy()
+    window.viewport.fit_scale.setValue(150)
+    np.testing.assert_allclose(window.viewport._ref.transform[:2, :2], 1.5 * auto[:2, :2])
+    assert np.abs(framebuffer(view).astype(int) - with_footage).sum(axis=2).max() > 30
 
 
 def test_click_a_joint_to_select_it_and_drag_to_rotate_it(qtbot, window, posed_key):

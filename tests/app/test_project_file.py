@@ -13,7 +13,7 @@ from gaitcore.io.project_file import (
 )
 from gaitcore.model import Rect, Stroke
 from gaitcore.pipeline import AnalysisSettings
-from gaitcore.project import AnimationOptions, Project, Silhouettes
+from gaitcore.project import AnimationOptions, FootageFit, Project, Silhouettes
 from gaitcore.silhouette import RoiClip
 
 
@@ -31,6 +31,7 @@ def make_project(footage) -> Project:
         alternates=(3, 5), key_poses={2: (1.0, -2.5)},
         silhouettes=Silhouettes(roi, "segmented"),
         animation=AnimationOptions(filtered=True, loop=True),
+        footage_fit=FootageFit(scale=1.25, offset_x_m=-0.1, offset_y_m=0.05, flip=True),
     )
 
 
@@ -183,4 +184,17 @@ def test_animation_options_default_for_older_files_and_are_checked(tmp_path):
     doc["animation"] = {"loop": "yes"}
     (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
     with pytest.raises(GaitInputError, match="damaged"):
+        load_project(tmp_path / "p.gaitproj")
+
+
+@pytest.mark.parametrize("entry", [{"scale": -1.0}, {"scale": "big"}, {"flip": 1}, [1, 2],
+                                   {"offset_x_m": float("inf")}])
+def test_a_bad_footage_fit_is_a_damaged_file(tmp_path, entry):
+    save_project(Project(), tmp_path / "p.gaitproj")
+    doc = json.loads((tmp_path / "p.gaitproj").read_text())
+    assert doc["footage_fit"] == {"scale": 1.0, "offset_x_m": 0.0, "offset_y_m": 0.0,
+                                  "flip": False}
+    doc["footage_fit"] = entry
+    (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
+    with pytest.raises(GaitInputError, match="is damaged"):
         load_project(tmp_path / "p.gaitproj")
