@@ -56,7 +56,12 @@ class SegmentationSettings:
     lut_bits : int
         Quantization of each BGR channel in the posterior table (5: 32 levels, 6: 64 levels).
     work_side_px : int
-        ``"grabcut"`` works on frames shrunk so that their longer side is at most this.
+        ``"grabcut"`` works on frames shrunk so that their longer side is at most this...
+    subject_side_px : int
+        ... unless the silhouette found there in the first frame is less than 3/4 of this
+        across (its longer side): then the working size grows (never beyond the source's)
+        until the subject is this big, for the whole clip, and the first frame is segmented
+        again, so a small animal in HD footage keeps its detail. 0 turns this off.
     band_frac : float
         Half-width of the band searched around the predicted silhouette, as a fraction of the
         silhouette's longer side.
@@ -76,6 +81,7 @@ class SegmentationSettings:
     n_components: int = 5
     lut_bits: int = 5
     work_side_px: int = 192
+    subject_side_px: int = 96
     band_frac: float = 0.06
     grabcut_iters: int = 1
     reach_frac: float = 0.2
@@ -116,8 +122,7 @@ class _Segmenter:
         self.model, self.s, self.shape = model, settings, shape
         rows, cols = shape
         self.min_area = max(1, int(settings.min_area_frac * rows * cols))
-        self.scale = min(1.0, settings.work_side_px / max(rows, cols))
-        self.work_wh = (max(1, round(cols * self.scale)), max(1, round(rows * self.scale)))
+        self._set_scale(min(1.0, settings.work_side_px / max(rows, cols)))
         self.hint, self.background = hint, background  # full-frame bool, first frame only
         self.prev: np.ndarray | None = None  # last silhouette at working size, uint8 0/1
         self.velocity = np.zeros(2)
@@ -136,9 +141,39 @@ class _Segmenter:
             self.prev = self._small(previous).astype(np.uint8)
             self.ref_area = float(self.prev.sum())
 
+    def _set_scale(self, scale: float) -> None:
+        rows, cols = self.shape
+        self.scale = scale
+        self.work_wh = (max(1, round(cols * scale)), max(1, round(rows * scale)))
+
+    def _grow_scale(self) -> bool:
+        """Work at a finer size when the subject is small there; True when it changed.
+
+        The tracking state moves to the new size; the graph cut's colour models are learnt
+        afresh.
+        """
+        target = self.s.subject_side_px
+        if not target or self.prev is None or self.scale >= 1.0:
+            return False
+        _, _, w, h = cv2.boundingRect(self.prev)
+        if max(w, h) >= 0.75 * target:
+            return False
+        old = self.scale
+        self._set_scale(min(1.0, old * target / max(w, h, 1)))
+        ratio = self.scale / old
+        self.prev = cv2.resize(self.prev, self.work_wh, interpolation=cv2.INTER_NEAREST)
+        self.last_xy = None if self.last_xy is None else self.last_xy * ratio
+        self.velocity = np.zeros(2)
+        self.ref_area *= ratio**2
+        self.gc_models = None
+        return True
+
     def step(self, frame: np.ndarray) -> Found | None:
         """The subject's component in ``frame`` (as ``SubjectTracker.update``), None if lost."""
         found = self._gmm(frame) if self.s.method == "gmm" else self._grabcut(frame)
+        if found is not None and self.s.method == "grabcut" and self.count == 0 \
+                and self._grow_scale():
+            found = self._grabcut(frame)  # the first frame again, at the finer size
         self.count += 1
         self.hint = self.background = None
         return found
@@ -316,6 +351,7 @@ def segment_frame(
     """
     frame = check_frame(frame_bgr)
     s = settings or SegmentationSettings()
+    _reset_rng()
     hint = rect_mask(frame.shape, subject_rects, "subject") if subject_rects else None
     bg = rect_mask(frame.shape, background_rects, "background") if background_rects else None
     seg = _Segmenter(model, s, frame.shape[:2], hint, bg if hint is not None else None)
@@ -398,6 +434,7 @@ def segment_clip(
         for t, frame in enumerate(frames):
             frame = check_frame(frame)
             if seg is None:
+                _reset_rng()
                 model = ColourModel.fit(frame, subject_rects, background_rects,
                                         n_components=s.n_components, lut_bits=s.lut_bits)
                 hint = rect_mask(frame.shape, subject_rects, "subject")
@@ -425,6 +462,16 @@ def segment_clip(
     if seg is None:
         raise GaitInputError("the clip has no frames: choose another file or frame range")
     return acc.finish(margin=margin, max_side=max_side)
+
+
+def _reset_rng() -> None:
+    """Seed OpenCV's random generator (this thread's) as a fresh process has it.
+
+    The graph cut's colour models start from k-means, which draws from that generator: without
+    this, a clip's silhouettes depended on what OpenCV had done before in the same thread (on
+    Muybridge's race horse, r2 fell from 0.94 to 0.30 for one of six earlier states).
+    """
+    cv2.setRNGSeed(0)
 
 
 def _shrink(image: np.ndarray, size_wh: tuple[int, int]) -> np.ndarray:

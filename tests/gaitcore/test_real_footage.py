@@ -2,6 +2,7 @@
 
 import json
 
+import cv2
 import pytest
 
 from gaitcore.cli import main
@@ -16,6 +17,7 @@ def test_muybridge_race_horse_period_and_verdict(shared_data, tmp_path):
             "--subject", "300,200,200,80", "--subject", "620,130,150,60",
             "--background", "20,20,300,120", "--background", "650,330,250,120",
             "--background", "0,420,250,80"]
+    cv2.setRNGSeed(1)  # whatever OpenCV did before must not matter (it took r2 to 0.30)
     assert main(args) == 0
     data = json.loads((tmp_path / "analysis.json").read_text())
     assert data["n_frames"] == 540
