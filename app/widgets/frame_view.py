@@ -192,7 +192,7 @@ class FrameView(QWidget):
         rect = QRectF(*box)
         self._window.setRect(rect)
         if self.show_silhouette:
-            crop = sil.roi.crops[frame]
+            crop = _smooth_upscale(sil.roi.crops[frame], box[2], box[3])
             rgba = np.zeros(crop.shape + (4,), np.uint8)
             rgba[crop] = TINT_RGBA
             self._tint.setImage(rgba, autoLevels=False, levels=(0, 255))
@@ -269,3 +269,18 @@ def _thin(points: np.ndarray, min_step_px: float = 1.0) -> np.ndarray:
         if np.hypot(*(p - kept[-1])) >= min_step_px:
             kept.append(p)
     return np.array(kept)
+
+
+TINT_MAX_SIDE = 512
+"""Longest side of the tint image: the crops (160 px) are upscaled to the window's size up to
+this, so that the silhouette's outline on HD footage is smooth rather than blocky."""
+
+
+def _smooth_upscale(crop: np.ndarray, width: float, height: float) -> np.ndarray:
+    """``crop`` (bool) resampled bilinearly to the window's size (capped) and thresholded."""
+    rows, cols = crop.shape
+    scale = min(width / cols, height / rows, TINT_MAX_SIDE / max(rows, cols))
+    if scale <= 1.0:
+        return crop
+    size = (max(1, round(cols * scale)), max(1, round(rows * scale)))
+    return cv2.resize(crop.astype(np.float32), size, interpolation=cv2.INTER_LINEAR) > 0.5
