@@ -13,7 +13,8 @@ Two methods:
 ``"grabcut"`` (default)
     Better than the paper: the previous frame's silhouette, shifted by the subject's motion,
     bounds a band where ``cv2.grabCut`` (graph cut on colour with a smoothness term) decides,
-    started from the colour model's labels, at a reduced working resolution; the colour model
+    started from the colour model's labels, at a reduced working resolution (chosen from the
+    frame, or from the subject when it is small in the frame); the colour model
     is refitted from confident pixels every few frames (mixed with the first frame's so it
     cannot drift away); a subject that shrinks away is declared lost and searched for again
     in the whole frame with the colour model.
