@@ -16,7 +16,7 @@ import numpy as np
 from PySide6.QtCore import QStandardPaths
 
 from app.document import silhouettes_from_masks
-from app.workers import Progress
+from gaitcore.progress import Progress
 from gaitcore.project import Project
 
 DEMO_GAIT = "canter"

@@ -19,8 +19,7 @@ from PySide6.QtWidgets import QProgressDialog, QWidget
 
 from gaitcore.errors import GaitInputError
 from gaitcore.frames import FrameSource
-
-Progress = Callable[[int, int], bool]
+from gaitcore.progress import Progress
 _PROGRESS_INTERVAL_S = 0.03
 
 

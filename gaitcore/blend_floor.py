@@ -26,13 +26,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from itertools import combinations
 from math import comb
-from typing import Callable, Sequence
+from typing import Sequence
 
 import numpy as np
 from scipy import sparse
 from scipy.optimize import linprog
 
 from gaitcore.errors import GaitInputError
+from gaitcore.progress import Progress, report
 
 MAX_SETS = 2_000_000
 """Most key sets :func:`best_blend_floor` enumerates."""
@@ -40,7 +41,6 @@ MAX_SETS = 2_000_000
 _CLIP_QUANTILES = (1.0, 0.9, 0.75, 0.6, 0.5, 0.4, 0.3, 0.2, 0.1, 0.05)
 _CHUNK = 1000
 
-Progress = Callable[[int, int], bool]
 
 
 @dataclass(frozen=True)
@@ -136,8 +136,7 @@ def best_blend_floor(truth: np.ndarray, keys: int, *,
         if ls.min() < fit:
             fit, best = float(ls.min()), chunk[int(np.argmin(ls))]
         done += len(chunk)
-        if progress is not None and progress(done, n_sets) is False:
-            raise InterruptedError("floor search stopped")
+        report(progress, done, n_sets, "floor search stopped")
     achieved = _lad(poses[best], poses, weights)
     return BestBlendFloor(keys, n_sets, lower, achieved, tuple(sorted(int(f) for f in first[best])))
 

@@ -9,17 +9,17 @@ perpendicular to the image plane.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
+from typing import Sequence
 
 import numpy as np
 
 from gaitcore.blend_floor import blend_floor
 from gaitcore.errors import GaitInputError
 from gaitcore.pipeline import Analysis, AnalysisSettings, analyze_silhouettes, animate, rekey
+from gaitcore.progress import Progress
 from gaitcore.silhouette import crop_rois
 from gaitcore.skeleton import Skeleton, load_template
 
-Progress = Callable[[int, int], bool]
 
 
 @dataclass(frozen=True)

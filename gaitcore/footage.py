@@ -7,7 +7,7 @@ images) is segmented from rectangles drawn on its first frame (paper Section 2.2
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Sequence
 
 import cv2
 import numpy as np
@@ -15,9 +15,9 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 from gaitcore.image_folder import iter_mask_folder, list_image_files
 from gaitcore.model import Rect
+from gaitcore.progress import Progress
 from gaitcore.silhouette import RoiClip, crop_rois
 
-Progress = Callable[[int, int], bool]
 
 
 def is_mask_folder(path: Path) -> bool:

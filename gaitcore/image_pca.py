@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+from gaitcore.progress import Progress, report
 
 _EIG_EPS = 1e-10
 """Eigenvalues below this fraction of the largest are treated as zero (no variance)."""
@@ -22,8 +22,6 @@ _POWER_ITERS = 4
 _STREAM_PASSES = 5 + 2 * _POWER_ITERS
 """Passes over the frames of the streamed fit: mean, variance, sketch, 2 per power
 iteration, components, projections."""
-
-Progress = Callable[[int, int], bool]
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,10 +92,9 @@ class ImagePCA:
         _check_stack(arr)
         if n_components < 1:
             raise GaitInputError(f"n_components must be at least 1, got {n_components}")
-        report = _Reporter(progress)
         if arr.shape[0] * arr.shape[1] * arr.shape[2] > DENSE_LIMIT:
-            return cls._fit_streamed(arr, n_components, report)
-        report(0, 1)
+            return cls._fit_streamed(arr, n_components, progress)
+        report(progress, 0, 1, _CANCELLED)
         x = _as_float_stack(arr)
         n = x.shape[0]
         mean = x.mean(axis=0)
@@ -124,12 +121,12 @@ class ImagePCA:
             sing = sing_all[:c]
             comps = vt[:c]
             total = float((sing_all**2).sum()) / n
-        report(1, 1)
+        report(progress, 1, 1, _CANCELLED)
         return cls._finish(arr.shape, mean, comps, sing, total, x @ comps.T)
 
     @classmethod
     def _fit_streamed(cls, arr: np.ndarray, n_components: int,
-                      report: "_Reporter") -> "ImagePCA":
+                      progress: Progress | None) -> "ImagePCA":
         """Randomized SVD (Halko, Martinsson and Tropp 2011) over chunks of frames.
 
         Memory stays at a few chunks of float rows plus (frames + pixels) x (c + 10) floats,
@@ -147,7 +144,7 @@ class ImagePCA:
             start = next(passes) * n_chunks
             for i, rows in enumerate(_chunks(flat, scale)):
                 yield i, rows
-                report(start + i + 1, _STREAM_PASSES * n_chunks)
+                report(progress, start + i + 1, _STREAM_PASSES * n_chunks, _CANCELLED)
 
         mean = np.zeros(d)
         sq_sum = 0.0
@@ -255,21 +252,11 @@ class ImagePCA:
         return out.reshape(self.n_components, 3, *self.image_shape)
 
 
+_CANCELLED = "PCA cancelled"
 _IDENTICAL = (
     "all frames are identical: there is no motion to analyse; check the silhouettes or "
     "choose another clip"
 )
-
-
-class _Reporter:
-    """Calls ``progress``; raises InterruptedError when it returns False."""
-
-    def __init__(self, progress: Progress | None) -> None:
-        self._progress = progress
-
-    def __call__(self, done: int, total: int) -> None:
-        if self._progress is not None and self._progress(done, total) is False:
-            raise InterruptedError("PCA cancelled")
 
 
 def _chunks(flat: np.ndarray, scale: float):

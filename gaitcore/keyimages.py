@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+from gaitcore.progress import report
 from gaitcore.rbf import DEFAULT_ALPHA, gaussian_kernel
 
 SINGULAR_RCOND = 1e-12
@@ -174,8 +175,7 @@ class _BranchAndBound:
         if self.progress is not None and now >= self.next_report:
             self.next_report = now + _PROGRESS_INTERVAL_S
             done = min(int(self.done * _PROGRESS_TOTAL), _PROGRESS_TOTAL)
-            if self.progress(done, _PROGRESS_TOTAL) is False:
-                raise InterruptedError("key-image search cancelled")
+            report(self.progress, done, _PROGRESS_TOTAL, "key-image search cancelled")
 
     def _keep(self, members: list, cands: np.ndarray, rows: np.ndarray, final: bool) -> np.ndarray:
         """Which sets members + cands[row] may beat the best set. On the final level, the

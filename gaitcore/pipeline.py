@@ -7,7 +7,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Callable
 
 import cv2
 import numpy as np
@@ -15,12 +14,12 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 from gaitcore.image_pca import ImagePCA
 from gaitcore.keyimages import KeySelection, select_key_images
+from gaitcore.progress import Progress
 from gaitcore.rbf import DEFAULT_ALPHA, RBFPoseMap
 from gaitcore.silhouette import RoiClip, stabilize_rois
 from gaitcore.spectrum import Diagnosis, Verdict, diagnose
 from gaitcore.switching import SwitchingModel, loop_angle, propose_alternates
 
-Progress = Callable[[int, int], bool]
 
 N_DIAGNOSIS_PCS = 5
 """Components kept for the spectral diagnosis table, whatever the number used to animate."""

@@ -31,6 +31,7 @@ import numpy as np
 from gaitcore.colour_model import ColourModel, check_frame, rect_mask
 from gaitcore.errors import GaitInputError
 from gaitcore.model import Rect
+from gaitcore.progress import Progress, report
 from gaitcore.silhouette import (
     RoiAccumulator,
     RoiClip,
@@ -39,7 +40,6 @@ from gaitcore.silhouette import (
     keep_overlapping,
 )
 
-Progress = Callable[[int, int], bool]
 MaskSink = Callable[[int, np.ndarray], None]
 METHODS = ("gmm", "grabcut")
 
@@ -455,8 +455,7 @@ def segment_clip(
                     crop, (x, y, w, h), _ = found
                     out[y : y + h, x : x + w] = crop * np.uint8(255)
                 mask_sink(t, out)
-            if progress is not None and progress(t + 1, max(total, t + 1)) is False:
-                raise InterruptedError("segmentation cancelled")
+            report(progress, t + 1, max(total, t + 1), "segmentation cancelled")
     finally:
         if hasattr(stream, "close"):
             stream.close()

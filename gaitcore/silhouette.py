@@ -13,14 +13,14 @@ the window size of the whole clip is known.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Iterable
+from typing import Iterable
 
 import cv2
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+from gaitcore.progress import Progress, report
 
-Progress = Callable[[int, int], bool]
 
 
 @dataclass(frozen=True, eq=False)
@@ -239,8 +239,7 @@ def track_subject(
             x, y, w, h = box
             subject[t, y : y + h, x : x + w] = crop
             centers[t], boxes[t] = center, box
-        if progress is not None and progress(t + 1, n) is False:
-            raise InterruptedError("subject tracking cancelled")
+        report(progress, t + 1, n, "subject tracking cancelled")
     return subject, centers, boxes
 
 
@@ -304,8 +303,7 @@ def crop_rois(
             acc.add_lost()
         else:
             acc.add(*found)
-        if progress is not None and progress(t + 1, total) is False:
-            raise InterruptedError("subject tracking cancelled")
+        report(progress, t + 1, total, "subject tracking cancelled")
     return acc.finish(margin=margin, max_side=max_side)
 
 

@@ -16,7 +16,8 @@ import numpy as np
 
 from gaitcore.errors import GaitInputError
 from gaitcore.model import Stroke
-from gaitcore.silhouette import Progress, RoiAccumulator, RoiClip
+from gaitcore.progress import Progress, report
+from gaitcore.silhouette import RoiAccumulator, RoiClip
 
 _SHIFT = 4  # fixed-point bits of the vertex coordinates given to OpenCV (1/16 pixel)
 FLOW_MARGIN_PX = 64  # optical flow is computed in the strokes' bounding box grown by this
@@ -153,8 +154,7 @@ def crop_sketches(
             m = cv2.moments(mask, binaryImage=True)
             acc.add(mask[y : y + h, x : x + w] > 0, np.array([x, y, w, h]),
                     np.array([m["m10"] / m["m00"], m["m01"] / m["m00"]]))
-        if progress is not None and progress(t + 1, n_frames) is False:
-            raise InterruptedError("sketch cropping cancelled")
+        report(progress, t + 1, n_frames, "sketch cropping cancelled")
     return acc.finish(margin=margin, max_side=max_side)
 
 

@@ -16,9 +16,9 @@ import numpy as np
 
 from gaitcore.errors import GaitInputError
 from gaitcore.io.pose_table import PoseTable, pose_matrix, write_pose_table
+from gaitcore.progress import Progress, report
 from gaitcore.skeleton import Skeleton
 
-Progress = Callable[[int, int], bool]
 
 
 @dataclass(frozen=True)
@@ -195,8 +195,8 @@ def write_preview_video(path: str | Path, footage_frames: Iterable[np.ndarray],
         try:
             frames = iter(footage_frames)
             for done in range(len(p)):
-                if progress is not None and progress(done, len(p)) is False:
-                    raise InterruptedError(f"preview video cancelled at frame {done} of {len(p)}")
+                report(progress, done, len(p),
+                       f"preview video cancelled at frame {done} of {len(p)}")
                 image = next(frames, None)
                 if image is None:
                     raise GaitInputError(f"the footage has {done} frames but there are {len(p)} "

@@ -17,14 +17,14 @@ machine without a display.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+from gaitcore.progress import Progress, report
 from gaitcore.skeleton import Skeleton
 
-Progress = Callable[[int, int], bool]
 
 BACKGROUND = (0.78, 0.84, 0.90)
 FAR_SIDE_SHADE = 0.7
@@ -194,8 +194,7 @@ def iter_render(skeleton: Skeleton, poses: np.ndarray, *, width: int = 320, heig
     with SkeletonRenderer(skeleton, width=width, height=height, yaw_deg=yaw_deg,
                           elevation_deg=elevation_deg, view_height_m=view_height_m) as r:
         for i, w in enumerate(world):
-            if progress is not None and progress(i, len(p)) is False:
-                raise InterruptedError(f"rendering cancelled at frame {i} of {len(p)}")
+            report(progress, i, len(p), f"rendering cancelled at frame {i} of {len(p)}")
             yield r.render_world(w)
     if progress is not None:
         progress(len(p), len(p))
