@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import replace
 
 from PySide6.QtCore import QObject, QTimer
-from PySide6.QtWidgets import QWidget
 
 from app.state import AppState
 from app.workers import Job, JobRunner, Progress, ProgressDialog
@@ -109,8 +108,7 @@ class AnalysisController(QObject):
         job.failed.connect(lambda message, j=job: self._failed(j, message))
         job.cancelled.connect(lambda j=job: self._finished(j))
         self._job = job
-        if isinstance(self.parent(), QWidget):
-            ProgressDialog(job, self.parent())  # shows itself only past 300 ms
+        ProgressDialog(job, self.parent())  # shows itself only past 300 ms
         self._runner.start(job)
 
     def _done(self, job: Job, silhouettes: Silhouettes, analysis: Analysis) -> None:

@@ -19,6 +19,7 @@ from PySide6.QtWidgets import QCheckBox, QHBoxLayout, QLabel, QVBoxLayout, QWidg
 from app.animation import CLAMP_RANGE, Animation, AnimationController
 from app.posing import PosingController
 from app.state import AppState
+from app.widgets.follow import show_value
 
 
 class AnimationView(QWidget):
@@ -78,10 +79,7 @@ class AnimationView(QWidget):
         options = self._controller.options
         for box, value in ((self.filtered, options.filtered), (self.clamp, options.clamp),
                            (self.loop, options.loop)):
-            if box.isChecked() != value:
-                box.blockSignals(True)
-                box.setChecked(value)
-                box.blockSignals(False)
+            show_value(box, value)
 
     def _on_options(self, *_checked) -> None:
         options = replace(self._controller.options, filtered=self.filtered.isChecked(),

@@ -23,6 +23,7 @@ from app.commands import (
     PinKeyCommand,
 )
 from app.state import AppState
+from app.widgets.follow import show_value
 from gaitcore.errors import GaitInputError
 from gaitcore.pipeline import Analysis
 
@@ -122,13 +123,9 @@ class PCPlotWidget(QWidget):
     # -- state -> widgets ---------------------------------------------------------------------
     def _sync_controls(self, *_changed) -> None:
         s = self._state.project.settings
-        for box, value in ((self.pcs, s.pcs), (self.keys, s.keys)):
-            box.blockSignals(True)
-            box.setValue(value)
-            box.blockSignals(False)
-        self.switching.blockSignals(True)
-        self.switching.setChecked(s.switching)
-        self.switching.blockSignals(False)
+        for control, value in ((self.pcs, s.pcs), (self.keys, s.keys),
+                               (self.switching, s.switching)):
+            show_value(control, value)
         self._update_buttons()
 
     def _on_analysis(self, analysis: Analysis | None) -> None:

@@ -9,7 +9,7 @@ a BVH frame, and change the rig.
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtCore import Qt
+from PySide6.QtCore import QSignalBlocker, Qt
 from PySide6.QtGui import QColor
 from PySide6.QtWidgets import (
     QDoubleSpinBox, QFormLayout, QGridLayout, QLabel, QListWidget, QListWidgetItem, QPushButton,
@@ -129,18 +129,17 @@ class PosePanel(QWidget):
         self._show_joint(state.selected_joint, frame)
 
     def _fill_joints(self, skeleton: Skeleton) -> None:
-        self.joints.blockSignals(True)
-        self.joints.clear()
-        items: dict[str, QTreeWidgetItem] = {}
-        for joint in skeleton.joints:
-            if not joint.channels:
-                continue
-            parent = items.get(joint.parent)
-            item = QTreeWidgetItem([joint.name])
-            (parent.addChild(item) if parent is not None else self.joints.addTopLevelItem(item))
-            items[joint.name] = item
-        self.joints.expandAll()
-        self.joints.blockSignals(False)
+        with QSignalBlocker(self.joints):
+            self.joints.clear()
+            items: dict[str, QTreeWidgetItem] = {}
+            for joint in skeleton.joints:
+                if not joint.channels:
+                    continue
+                parent = items.get(joint.parent)
+                item = QTreeWidgetItem([joint.name])
+                (parent.addChild(item) if parent is not None else self.joints.addTopLevelItem(item))
+                items[joint.name] = item
+            self.joints.expandAll()
         limits = skeleton.limits_array()
         self._limits = {c: limits[i] for i, c in enumerate(skeleton.channel_names)}
 
@@ -158,10 +157,9 @@ class PosePanel(QWidget):
     def _show_joint(self, name: str, frame: int | None) -> None:
         current = self.joints.currentItem()
         if (current.text(0) if current else "") != name:
-            self.joints.blockSignals(True)
             found = self.joints.findItems(name, Qt.MatchFlag.MatchExactly | Qt.MatchFlag.MatchRecursive)
-            self.joints.setCurrentItem(found[0] if found and name else None)
-            self.joints.blockSignals(False)
+            with QSignalBlocker(self.joints):
+                self.joints.setCurrentItem(found[0] if found and name else None)
         pose = None if frame is None else self._posing.pose_of(frame)
         skeleton = self._state.skeleton
         for ch, box in self.spins.items():
@@ -173,10 +171,9 @@ class PosePanel(QWidget):
                 continue
             lo, hi = self._limits[channel]
             span = TRANSLATION_RANGE_M if ch.startswith("t") else ANGLE_RANGE_DEG
-            box.blockSignals(True)
-            box.setRange(lo if np.isfinite(lo) else -span, hi if np.isfinite(hi) else span)
-            box.setValue(0.0 if pose is None else float(pose[skeleton.channel_index(channel)]))
-            box.blockSignals(False)
+            with QSignalBlocker(box):
+                box.setRange(lo if np.isfinite(lo) else -span, hi if np.isfinite(hi) else span)
+                box.setValue(0.0 if pose is None else float(pose[skeleton.channel_index(channel)]))
 
     # -- widgets -> edits ----------------------------------------------------------------------
     def _on_joint_clicked(self, item: QTreeWidgetItem | None, _previous=None) -> None:

@@ -27,6 +27,7 @@ from app.animation import AnimationController
 from app.commands import FootageFitCommand
 from app.posing import PosingController
 from app.state import AppState
+from app.widgets.follow import show_value
 from app.widgets.reference_plane import (
     SkeletonExtent, reference_image, silhouette_height_px, skeleton_extent,
 )
@@ -245,16 +246,9 @@ class PoseViewport(QWidget):
     def _show_fit(self, *_changed) -> None:
         """Show the project's footage fit in the controls and on the plane."""
         fit = self._state.project.footage_fit
-        for widget, value in ((self.fit_scale, 100 * fit.scale), (self.fit_x, 100 * fit.offset_x_m),
-                              (self.fit_y, 100 * fit.offset_y_m)):
-            if widget.value() != value:
-                widget.blockSignals(True)
-                widget.setValue(value)
-                widget.blockSignals(False)
-        if self.flip.isChecked() != fit.flip:
-            self.flip.blockSignals(True)
-            self.flip.setChecked(fit.flip)
-            self.flip.blockSignals(False)
+        for control, value in ((self.fit_scale, 100 * fit.scale), (self.fit_x, 100 * fit.offset_x_m),
+                               (self.fit_y, 100 * fit.offset_y_m), (self.flip, fit.flip)):
+            show_value(control, value)
         if fit != self._fit:
             self._fit = fit
             self._update_reference()
