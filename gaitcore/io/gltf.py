@@ -75,7 +75,7 @@ def write_glb(path: str | Path, skeleton: Skeleton, poses: np.ndarray, fps: floa
         params[:, skeleton.joint_index(joint), CHANNEL_ORDER.index(ch)] = p[:, i]
 
     gltf = _Document()
-    rest_world = _rest_world_translations(skeleton)
+    rest_world = skeleton.joint_positions(skeleton.rest_pose())
     nodes = []
     for j, joint in enumerate(skeleton.joints):
         node = {"name": joint.name, "translation": [float(v) for v in joint.offset]}
@@ -104,14 +104,6 @@ def write_glb(path: str | Path, skeleton: Skeleton, poses: np.ndarray, fps: floa
     gltf.doc["scene"] = 0
     gltf.doc["animations"] = [_animation(gltf, skeleton, params, fps)]
     gltf.write(Path(path))
-
-
-def _rest_world_translations(skeleton: Skeleton) -> np.ndarray:
-    """World position of every joint in the rest pose (no rotations), shape (J, 3)."""
-    world = np.zeros((skeleton.n_joints, 3))
-    for j, parent in enumerate(skeleton.parents):
-        world[j] = skeleton.offsets[j] + (world[parent] if parent >= 0 else 0.0)
-    return world
 
 
 def quaternions_zxy(angles_deg: np.ndarray) -> np.ndarray:

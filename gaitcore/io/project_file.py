@@ -181,36 +181,30 @@ def _from_json(doc: dict, p: Path) -> Project:
         key_poses={int(k): tuple(v) for k, v in doc["key_poses"].items()},
         silhouettes=None if sil is None else _read_silhouettes(sil, sidecar_dir(p)),
         skeleton=None if doc.get("skeleton") is None else Skeleton.from_json(doc["skeleton"]),
-        animation=_animation_options(doc.get("animation", {})),
-        footage_fit=_footage_fit(doc.get("footage_fit", {})),
+        animation=_options(AnimationOptions, doc.get("animation", {}), "animation options"),
+        footage_fit=_options(FootageFit, doc.get("footage_fit", {}), "footage fit"),
     )
 
 
-def _footage_fit(entry: dict) -> FootageFit:
-    """The "footage_fit" entry (absent in older projects: the automatic placement)."""
+def _options(cls: type, entry: object, what: str):
+    """A small options dataclass (``cls``) from its JSON object.
+
+    Fields absent from ``entry`` keep their defaults (projects saved before they existed);
+    each present one must have the type of its default (true/false, or a number).
+    """
     if not isinstance(entry, dict):
-        raise TypeError(f"footage fit must be an object, got {entry!r}")
-    known = FootageFit.__dataclass_fields__
-    fit = {k: v for k, v in entry.items() if k in known}
-    if not isinstance(fit.get("flip", False), bool) or not all(
-            isinstance(fit.get(k, 0.0), (int, float)) and not isinstance(fit.get(k, 0.0), bool)
-            for k in ("scale", "offset_x_m", "offset_y_m")):
-        raise TypeError(f"footage fit has values of the wrong type: {entry!r}")
+        raise TypeError(f"{what} must be an object, got {entry!r}")
+    defaults, values = cls(), {}
+    for name in cls.__dataclass_fields__.keys() & entry.keys():
+        value, flag = entry[name], isinstance(getattr(defaults, name), bool)
+        if isinstance(value, bool) != flag or not isinstance(value, (bool, int, float)):
+            kind = "true or false" if flag else "a number"
+            raise TypeError(f"{what}: {name} must be {kind}, got {value!r}")
+        values[name] = value
     try:
-        return FootageFit(**fit)
+        return cls(**values)
     except GaitInputError as exc:  # reported as a damaged file, like every bad entry
         raise ValueError(str(exc)) from None
-
-
-def _animation_options(entry: dict) -> AnimationOptions:
-    """The "animation" entry (absent in projects saved before it existed: defaults)."""
-    if not isinstance(entry, dict):
-        raise TypeError(f"animation options must be an object, got {entry!r}")
-    known = AnimationOptions.__dataclass_fields__
-    options = {k: v for k, v in entry.items() if k in known}
-    if not all(isinstance(v, bool) for v in options.values()):
-        raise TypeError(f"animation options must be true or false, got {entry!r}")
-    return AnimationOptions(**options)
 
 
 def _read_doc(p: Path) -> dict:
