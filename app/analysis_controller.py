@@ -15,11 +15,11 @@ from PySide6.QtCore import QObject, QTimer
 
 from app.state import AppState
 from app.workers import Job, JobRunner, Progress, ProgressDialog
+from gaitcore.analysis.alternates import propose_alternates
+from gaitcore.analysis.analyze import Analysis, AnalysisSettings, analyze_silhouettes
+from gaitcore.analysis.keyimages import select_key_images
 from gaitcore.errors import GaitInputError
-from gaitcore.keyimages import select_key_images
-from gaitcore.pipeline import Analysis, AnalysisSettings, analyze_silhouettes
-from gaitcore.project import Project, Silhouettes
-from gaitcore.switching import propose_alternates
+from gaitcore.project.document import Project, Silhouettes
 
 _COALESCE_MS = 80
 

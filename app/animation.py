@@ -18,12 +18,13 @@ from PySide6.QtCore import QObject, QTimer, Signal
 from app.commands import AnimationOptionsCommand
 from app.posing import alternates_in_use, missing_poses
 from app.state import AppState
-from gaitcore.animation import InterpolationWeights, interpolation_weights, loop_cycle
+from gaitcore.analysis.analyze import Analysis
+from gaitcore.animation.animate import animate
+from gaitcore.animation.weights import InterpolationWeights, interpolation_weights, loop_cycle
 from gaitcore.errors import GaitInputError
 from gaitcore.io.analysis_file import analysis_record
-from gaitcore.pipeline import Analysis, animate
-from gaitcore.project import AnimationOptions, Project
-from gaitcore.skeleton import Skeleton
+from gaitcore.project.document import AnimationOptions, Project
+from gaitcore.rig.skeleton import Skeleton
 
 CLAMP_RANGE = (0.0, 1.0)
 _COALESCE_MS = 40

@@ -19,8 +19,8 @@ from PySide6.QtCore import QLockFile, QObject, QTimer
 
 from app.state import AppState
 from gaitcore.errors import GaitInputError
-from gaitcore.io.project_file import SUFFIX, load_project, save_project, sidecar_dir
-from gaitcore.project import Project
+from gaitcore.project.document import Project
+from gaitcore.project.storage import SUFFIX, load_project, save_project, sidecar_dir
 
 DEFAULT_INTERVAL_MS = 60_000
 

@@ -12,9 +12,9 @@ from dataclasses import replace
 from PySide6.QtGui import QUndoCommand
 
 from app.state import AppState
-from gaitcore.model import Rect, Stroke
-from gaitcore.pipeline import AnalysisSettings
-from gaitcore.project import AnimationOptions, FootageFit, Project, Silhouettes
+from gaitcore.analysis.analyze import AnalysisSettings
+from gaitcore.project.document import AnimationOptions, FootageFit, Project, Silhouettes
+from gaitcore.silhouettes.annotations import Rect, Stroke
 
 _SETTINGS_ID = 1001
 _FOOTAGE_FIT_ID = 1002

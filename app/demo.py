@@ -1,6 +1,6 @@
 """The demo project: a synthetic horse canter (paper Section 4), rendered once and cached.
 
-The clip is rendered with :mod:`gaitcore.synth` into the user's cache folder the first time
+The clip is rendered with :mod:`gaitcore.bench` into the user's cache folder the first time
 (a few seconds), then reused. The demo project shows the rendered images as footage and
 tracks the exact masks rendered with them, so everything is computed at once.
 """
@@ -17,7 +17,7 @@ from PySide6.QtCore import QStandardPaths
 
 from app.document import silhouettes_from_masks
 from gaitcore.progress import Progress
-from gaitcore.project import Project
+from gaitcore.project.document import Project
 
 DEMO_GAIT = "canter"
 DEMO_FRAMES = 100
@@ -48,8 +48,8 @@ def ensure_demo_clip(folder: Path, progress: Progress | None = None) -> Path:
     if (folder / _DONE).exists():
         return folder
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-    from gaitcore.skeleton import load_template
-    from gaitcore.synth import generate_gait, iter_render
+    from gaitcore.bench import generate_gait, iter_render
+    from gaitcore.rig.skeleton import load_template
 
     partial = folder.with_name(folder.name + ".partial")
     shutil.rmtree(partial, ignore_errors=True)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from PySide6.QtWidgets import QFileDialog, QInputDialog, QMessageBox, QWidget
 
-from gaitcore.io.project_file import SUFFIX
+from gaitcore.project.storage import SUFFIX
 
 FOOTAGE_FILTER = "Footage (*.mp4 *.mov *.avi *.mkv *.m4v *.webm *.gif);;All files (*)"
 PROJECT_FILTER = f"Gait Studio projects (*{SUFFIX})"

@@ -17,15 +17,15 @@ from app.dialogs import Asker
 from app.state import AppState
 from app.workers import Job, JobRunner, ProgressDialog
 from gaitcore.errors import GaitInputError
-from gaitcore.footage import is_mask_folder
-from gaitcore.frames import FrameSource, open_frames
-from gaitcore.image_folder import read_mask_folder
-from gaitcore.io.project_file import SUFFIX, load_project, missing_footage, save_project
-from gaitcore.project import Project, Silhouettes
-from gaitcore.silhouette import crop_rois
+from gaitcore.footage.image_folder import read_mask_folder
+from gaitcore.footage.sources import FrameSource, open_frames
+from gaitcore.project.document import Project, Silhouettes
+from gaitcore.project.storage import SUFFIX, load_project, missing_footage, save_project
+from gaitcore.silhouettes.extract import is_mask_folder
+from gaitcore.silhouettes.tracking import crop_rois
 
 MAX_RECENT = 8
-ROI_MAX_SIDE = 160  # as gaitcore.segmentation.segment_clip
+ROI_MAX_SIDE = 160  # as gaitcore.silhouettes.segmentation.segment_clip
 
 
 def silhouettes_from_masks(folder: Path, progress) -> Silhouettes:

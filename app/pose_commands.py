@@ -14,7 +14,7 @@ from PySide6.QtGui import QUndoCommand
 
 from app.commands import ProjectCommand
 from app.state import AppState
-from gaitcore.skeleton import Skeleton
+from gaitcore.rig.skeleton import Skeleton
 
 _POSE_ID = 1002
 

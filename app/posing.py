@@ -9,9 +9,9 @@ An import that fails changes nothing and says why.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from itertools import count
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 from PySide6.QtCore import QObject, Signal
@@ -19,12 +19,13 @@ from PySide6.QtCore import QObject, Signal
 from app.dialogs import Asker
 from app.pose_commands import SetPoseCommand, SetSkeletonCommand
 from app.state import AppState
+from gaitcore.analysis.analyze import Analysis
 from gaitcore.errors import GaitInputError
-from gaitcore.io.bvh_reader import read_bvh, zxy_from_matrix
+from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.pose_table import PoseTable, read_pose_table
-from gaitcore.pipeline import Analysis
-from gaitcore.project import Project
-from gaitcore.skeleton import Skeleton, euler_zxy_matrix
+from gaitcore.project.document import Project
+from gaitcore.rig.rotations import euler_zxy_matrix, zxy_from_matrix
+from gaitcore.rig.skeleton import Skeleton
 
 IGNORED_COLUMNS = ("time_s",)
 MAX_LISTED = 10

@@ -13,10 +13,10 @@ from pathlib import Path
 from PySide6.QtCore import QObject, Signal
 from PySide6.QtGui import QUndoStack
 
-from gaitcore.frames import FrameSource
-from gaitcore.pipeline import Analysis
-from gaitcore.project import Project
-from gaitcore.skeleton import Skeleton, load_template
+from gaitcore.analysis.analyze import Analysis
+from gaitcore.footage.sources import FrameSource
+from gaitcore.project.document import Project
+from gaitcore.rig.skeleton import Skeleton, load_template
 
 DEFAULT_SKELETON = "horse"
 

@@ -1,6 +1,6 @@
 """Segmentation and sketch tools: the toolbar, and the gaitcore calls behind it.
 
-Every call into :mod:`gaitcore.segmentation` and :mod:`gaitcore.sketch` is in the four
+Every call into :mod:`gaitcore.silhouettes.segmentation` and :mod:`gaitcore.silhouettes.sketch` is in the four
 functions at the top, so an API change there is one edit here. Long work runs as a job with
 a progress dialog and Cancel; results land as undoable commands.
 """
@@ -17,11 +17,11 @@ from app.state import AppState
 from app.widgets.frame_canvas import Tool
 from app.widgets.frame_view import FrameView
 from app.workers import Job, Progress
-from gaitcore.frames import FrameSource
-from gaitcore.model import Stroke
-from gaitcore.project import Project, Silhouettes
-from gaitcore.segmentation import segment_clip
-from gaitcore.sketch import carry_strokes, crop_sketches, propagate_strokes
+from gaitcore.footage.sources import FrameSource
+from gaitcore.project.document import Project, Silhouettes
+from gaitcore.silhouettes.annotations import Stroke
+from gaitcore.silhouettes.segmentation import segment_clip
+from gaitcore.silhouettes.sketch import carry_strokes, crop_sketches, propagate_strokes
 
 TOOL_KEYS = {Tool.NAVIGATE: "N", Tool.SUBJECT: "S", Tool.BACKGROUND: "B", Tool.DRAW: "D",
              Tool.ERASE: "E"}

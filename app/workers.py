@@ -12,14 +12,15 @@ import sys
 import threading
 import time
 import traceback
-from typing import Callable
+from collections.abc import Callable
 
-from PySide6.QtCore import QObject, QThread, QThreadPool, Qt, Signal
+from PySide6.QtCore import QObject, Qt, QThread, QThreadPool, Signal
 from PySide6.QtWidgets import QProgressDialog, QWidget
 
 from gaitcore.errors import GaitInputError
-from gaitcore.frames import FrameSource
+from gaitcore.footage.sources import FrameSource
 from gaitcore.progress import Progress
+
 _PROGRESS_INTERVAL_S = 0.03
 
 

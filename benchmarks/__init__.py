@@ -11,7 +11,7 @@ import platform
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 
 import numpy as np
 
@@ -51,7 +51,7 @@ def _cpu_name() -> str:
 
 def machine() -> str:
     """One line saying where and when a benchmark ran."""
-    date = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    date = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     return (
         f"{date}; {os.cpu_count()} CPUs ({_cpu_name()}); Python {platform.python_version()}; "
         f"numpy {np.__version__}; {sys.platform}"

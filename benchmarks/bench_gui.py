@@ -27,7 +27,6 @@ if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
 
 from benchmarks import Section
 
-
 TARGET_MS = 30.0
 PASSES = 2
 BURST = 20
@@ -71,7 +70,7 @@ def run() -> list[Section]:
 def scrub_latency(app, window, folder: Path) -> Section:
     import cv2
 
-    from gaitcore.frames import open_frames
+    from gaitcore.footage.sources import open_frames
 
     n = window.state.n_frames
     order = np.random.default_rng(0).permutation(np.tile(np.arange(n), PASSES))

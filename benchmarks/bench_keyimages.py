@@ -16,8 +16,8 @@ from math import comb
 import numpy as np
 
 from benchmarks import Section
-from gaitcore.keyimages import select_key_images
-from gaitcore.rbf import DEFAULT_ALPHA, gaussian_kernel
+from gaitcore.analysis.kernel import DEFAULT_ALPHA, gaussian_kernel
+from gaitcore.analysis.keyimages import select_key_images
 
 N_FRAMES = 137
 REPEATS = 3

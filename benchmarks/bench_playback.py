@@ -78,7 +78,7 @@ def _measure() -> dict:
     from app.demo import DEMO_GAIT, demo_folder, demo_project
     from app.dialogs import HeadlessAsker
     from app.main_window import MainWindow
-    from gaitcore.synth import generate_gait
+    from gaitcore.bench import generate_gait
 
     project = demo_project(demo_folder())
     with tempfile.TemporaryDirectory() as tmp:

@@ -20,9 +20,9 @@ import cv2
 import numpy as np
 
 from benchmarks import Section
-from gaitcore.io.project_file import load_project, save_project, sidecar_dir
-from gaitcore.project import Project, Silhouettes
-from gaitcore.silhouette import RoiClip
+from gaitcore.project.document import Project, Silhouettes
+from gaitcore.project.storage import load_project, save_project, sidecar_dir
+from gaitcore.silhouettes.tracking import RoiClip
 
 N_FRAMES, ROWS, COLS = 10_000, 200, 260
 

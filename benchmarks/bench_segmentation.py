@@ -27,10 +27,10 @@ import cv2
 import numpy as np
 
 from benchmarks import Section
-from gaitcore.frames import open_frames
-from gaitcore.image_folder import read_mask_folder
-from gaitcore.model import Rect
-from gaitcore.segmentation import SegmentationSettings, segment_clip
+from gaitcore.footage.image_folder import read_mask_folder
+from gaitcore.footage.sources import open_frames
+from gaitcore.silhouettes.annotations import Rect
+from gaitcore.silhouettes.segmentation import SegmentationSettings, segment_clip
 
 ROOT = Path(__file__).resolve().parents[1]
 DAVIS = ROOT.parent / "shared" / "data" / "davis-bear"
@@ -79,9 +79,9 @@ def davis_quality_and_speed() -> Section:
 
 def small_animal_in_hd(n_frames: int = 60) -> Section:
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
-    from gaitcore.skeleton import load_template
-    from gaitcore.synth import generate_gait
-    from gaitcore.synth.render import render_clip
+    from gaitcore.bench import generate_gait
+    from gaitcore.rig.render import render_clip
+    from gaitcore.rig.skeleton import load_template
 
     horse = load_template("horse")
     rgb, masks = render_clip(horse, generate_gait(horse, "canter", n_frames), width=320,

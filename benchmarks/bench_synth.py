@@ -20,9 +20,9 @@ import numpy as np
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 from benchmarks import Section
-from gaitcore.skeleton import Skeleton, load_template
-from gaitcore.synth.gaits import generate_gait
-from gaitcore.synth.render import SkeletonRenderer, render_clip
+from gaitcore.bench.gaits import generate_gait
+from gaitcore.rig.render import SkeletonRenderer, render_clip
+from gaitcore.rig.skeleton import Skeleton, load_template
 
 WIDTH, HEIGHT = 320, 240
 N_FRAMES = 240

@@ -4,11 +4,11 @@ Pure numpy/scipy/OpenCV code with no GUI dependency. The GUI in ``app`` and the 
 command are both thin layers over this package.
 """
 
+from gaitcore.analysis.image_pca import ImagePCA
+from gaitcore.analysis.keyimages import KeySelection, condition_curve, select_key_images
+from gaitcore.analysis.spectrum import Diagnosis, Verdict, diagnose
+from gaitcore.animation.rbf import RBFPoseMap
 from gaitcore.errors import GaitInputError
-from gaitcore.image_pca import ImagePCA
-from gaitcore.keyimages import KeySelection, condition_curve, select_key_images
-from gaitcore.rbf import RBFPoseMap
-from gaitcore.spectrum import Diagnosis, Verdict, diagnose
 
 __all__ = [
     "Diagnosis",

@@ -11,8 +11,8 @@ import json
 import sys
 from pathlib import Path
 
+from gaitcore.bench import synth_command
 from gaitcore.errors import GaitInputError
-from gaitcore.synth import command as synth_command
 
 
 class _Parser(argparse.ArgumentParser):
@@ -23,7 +23,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _rect(text: str):
-    from gaitcore.model import Rect
+    from gaitcore.silhouettes.annotations import Rect
 
     try:
         x, y, w, h = (int(round(float(v))) for v in text.split(","))
@@ -80,9 +80,9 @@ def _add_analyze(sub) -> None:
 
 
 def _run_analyze(args: argparse.Namespace) -> int:
-    from gaitcore.footage import load_silhouettes
+    from gaitcore.analysis.analyze import AnalysisSettings, analyze_silhouettes
     from gaitcore.io.analysis_file import analysis_to_dict, write_analysis_json
-    from gaitcore.pipeline import AnalysisSettings, analyze_silhouettes
+    from gaitcore.silhouettes.extract import load_silhouettes
 
     settings = AnalysisSettings(
         pcs=args.pcs,
@@ -146,10 +146,10 @@ def _add_animate(sub) -> None:
 def _run_animate(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from gaitcore.animation.animate import animate
     from gaitcore.io.analysis_file import read_analysis_json
     from gaitcore.io.export import EXPORTERS
     from gaitcore.io.pose_table import PoseTable, pose_matrix, read_pose_table, write_pose_table
-    from gaitcore.pipeline import animate
 
     exports = [(flag, path) for flag, path in (("bvh", args.bvh), ("glb", args.glb))
                if path is not None]
@@ -160,8 +160,8 @@ def _run_animate(args: argparse.Namespace) -> int:
         raise GaitInputError(f"--fps must be a positive number of frames per second, got {args.fps}")
     skeleton = None
     if args.skeleton is not None:
-        from gaitcore.io.bvh_reader import read_bvh
-        from gaitcore.skeleton import Skeleton
+        from gaitcore.io.bvh.reader import read_bvh
+        from gaitcore.rig.skeleton import Skeleton
 
         if args.skeleton.suffix.lower() == ".bvh":
             skeleton = read_bvh(args.skeleton)[0]
@@ -241,7 +241,7 @@ def _add_evaluate(sub) -> None:
 
 
 def _run_evaluate(args: argparse.Namespace) -> int:
-    from gaitcore.evaluate import BenchSettings, evaluate_gait
+    from gaitcore.bench.evaluate import BenchSettings, evaluate_gait
 
     settings = BenchSettings(
         gait=args.gait, n_frames=args.frames, width=args.width, height=args.height,
@@ -250,7 +250,7 @@ def _run_evaluate(args: argparse.Namespace) -> int:
     ev = evaluate_gait(settings, pcs=args.pcs, keys=args.keys, switching=args.switching,
                        stabilize_roi=not args.paper_roi)
     if args.plots is not None:
-        from gaitcore.plots import plot_error_curves, plot_trajectory
+        from gaitcore.bench.plots import plot_error_curves, plot_trajectory
 
         args.plots.mkdir(parents=True, exist_ok=True)
         pcs, keys = min(2, max(args.pcs)), 4 if 4 in args.keys else max(args.keys)

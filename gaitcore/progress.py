@@ -6,7 +6,7 @@ work advances, and returning False (the GUI's Cancel) stops the work with Interr
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 Progress = Callable[[int, int], bool]
 

@@ -13,9 +13,9 @@ import sys
 
 import numpy as np
 
-from gaitcore.evaluate import angle_error_deg
+from gaitcore.bench.evaluate import angle_error_deg
 from gaitcore.io.pose_table import PoseTable, pose_matrix, read_pose_table, write_pose_table
-from gaitcore.skeleton import Skeleton
+from gaitcore.rig.skeleton import Skeleton
 
 DEMO_FPS = 25.0
 
@@ -43,8 +43,8 @@ def save_project(clip: str, keys_path: str, out_path: str) -> None:
     from pathlib import Path
 
     from app.document import silhouettes_from_masks
-    from gaitcore.io.project_file import save_project as write_project
-    from gaitcore.project import Project
+    from gaitcore.project.document import Project
+    from gaitcore.project.storage import save_project as write_project
 
     clip_dir = Path(clip).absolute()
     skeleton = Skeleton.from_json(clip_dir / "skeleton.json")

@@ -2,7 +2,7 @@
 
     .venv/bin/python scripts/make_validation.py      (about four minutes on 2 cores)
 
-Every figure in the document comes from ``gaitcore.evaluate`` run here; nothing is typed in.
+Every figure in the document comes from ``gaitcore.bench.evaluate`` run here; nothing is typed in.
 """
 
 from __future__ import annotations
@@ -14,11 +14,11 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 import numpy as np  # noqa: E402
 
-from gaitcore.blend_floor import best_blend_floor  # noqa: E402
-from gaitcore.evaluate import BenchSettings, evaluate_gait  # noqa: E402
-from gaitcore.plots import plot_error_curves, plot_trajectory  # noqa: E402
-from gaitcore.skeleton import load_template  # noqa: E402
-from gaitcore.synth.gaits import generate_gait  # noqa: E402
+from gaitcore.bench.blend_floor import best_blend_floor  # noqa: E402
+from gaitcore.bench.evaluate import BenchSettings, evaluate_gait  # noqa: E402
+from gaitcore.bench.gaits import generate_gait  # noqa: E402
+from gaitcore.bench.plots import plot_error_curves, plot_trajectory  # noqa: E402
+from gaitcore.rig.skeleton import load_template  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"

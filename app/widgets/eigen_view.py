@@ -12,7 +12,7 @@ from PySide6.QtGui import QImage, QPixmap
 from PySide6.QtWidgets import QGridLayout, QLabel, QWidget
 
 from app.state import AppState
-from gaitcore.pipeline import Analysis
+from gaitcore.analysis.analyze import Analysis
 
 ROWS = 3
 SCALE_SD = 2.0

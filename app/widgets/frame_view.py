@@ -19,7 +19,7 @@ from app.state import AppState
 from app.widgets.frame_canvas import CanvasViewBox, Tool
 from app.workers import FrameLoader
 from gaitcore.errors import GaitInputError
-from gaitcore.model import Rect, Stroke
+from gaitcore.silhouettes.annotations import Rect, Stroke
 
 TINT_RGBA = (0, 190, 255, 100)
 SUBJECT_COLOUR = QColor(40, 200, 60)

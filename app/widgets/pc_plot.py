@@ -15,17 +15,26 @@ import pyqtgraph as pg
 from PySide6.QtCore import Signal
 from PySide6.QtGui import QColor
 from PySide6.QtWidgets import (
-    QCheckBox, QHBoxLayout, QLabel, QPushButton, QSpinBox, QVBoxLayout, QWidget,
+    QCheckBox,
+    QHBoxLayout,
+    QLabel,
+    QPushButton,
+    QSpinBox,
+    QVBoxLayout,
+    QWidget,
 )
 
 from app.commands import (
-    AcceptAlternatesCommand, ChangeSettingsCommand, ClearKeyConstraintsCommand, ForbidKeyCommand,
+    AcceptAlternatesCommand,
+    ChangeSettingsCommand,
+    ClearKeyConstraintsCommand,
+    ForbidKeyCommand,
     PinKeyCommand,
 )
 from app.state import AppState
 from app.widgets.follow import show_value
+from gaitcore.analysis.analyze import Analysis
 from gaitcore.errors import GaitInputError
-from gaitcore.pipeline import Analysis
 
 KEY_PEN = pg.mkPen(QColor(255, 140, 0), width=3)
 ALT_PEN = pg.mkPen(QColor(0, 170, 220), width=2)

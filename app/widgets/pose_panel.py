@@ -12,13 +12,22 @@ import numpy as np
 from PySide6.QtCore import QSignalBlocker, Qt
 from PySide6.QtGui import QColor
 from PySide6.QtWidgets import (
-    QDoubleSpinBox, QFormLayout, QGridLayout, QLabel, QListWidget, QListWidgetItem, QPushButton,
-    QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget,
+    QDoubleSpinBox,
+    QFormLayout,
+    QGridLayout,
+    QLabel,
+    QListWidget,
+    QListWidgetItem,
+    QPushButton,
+    QTreeWidget,
+    QTreeWidgetItem,
+    QVBoxLayout,
+    QWidget,
 )
 
 from app.posing import PosingController
 from app.state import AppState
-from gaitcore.skeleton import CHANNEL_ORDER, Skeleton
+from gaitcore.rig.skeleton import CHANNEL_ORDER, Skeleton
 
 ANGLE_RANGE_DEG = 180.0
 TRANSLATION_RANGE_M = 100.0

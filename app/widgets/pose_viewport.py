@@ -14,13 +14,19 @@ posing panel needs no GL.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
-from typing import Callable
 
 import numpy as np
 from PySide6.QtCore import Qt, QTimer
 from PySide6.QtWidgets import (
-    QCheckBox, QDoubleSpinBox, QHBoxLayout, QLabel, QToolButton, QVBoxLayout, QWidget,
+    QCheckBox,
+    QDoubleSpinBox,
+    QHBoxLayout,
+    QLabel,
+    QToolButton,
+    QVBoxLayout,
+    QWidget,
 )
 
 from app.animation import AnimationController
@@ -29,12 +35,15 @@ from app.posing import PosingController
 from app.state import AppState
 from app.widgets.follow import show_value
 from app.widgets.reference_plane import (
-    SkeletonExtent, reference_image, silhouette_height_px, skeleton_extent,
+    SkeletonExtent,
+    reference_image,
+    silhouette_height_px,
+    skeleton_extent,
 )
 from app.widgets.skeleton_gl import SkeletonGLView, opengl_available
 from app.workers import FrameLoader
-from gaitcore.project import FootageFit, Silhouettes
-from gaitcore.skeleton import Skeleton
+from gaitcore.project.document import FootageFit, Silhouettes
+from gaitcore.rig.skeleton import Skeleton
 
 VIEW_MARGIN = 1.35
 FOOTAGE_WAIT_MS = 100

@@ -4,7 +4,7 @@ The footage is a plane in gaitcore's XY plane, behind the skeleton (negative Z, 
 side camera). Its scale makes the median height of the tracked silhouettes equal to the
 skeleton's rest height, and the silhouette's centre of mass in the shown frame (the ROI
 centre, paper Section 2.2) lands on the skeleton's centre (area-weighted centre of its bone
-ellipsoids seen from the side); the project's :class:`~gaitcore.project.FootageFit` corrects
+ellipsoids seen from the side); the project's :class:`~gaitcore.project.document.FootageFit` corrects
 that placement (scale about the anchor, shift, mirror). Only the part of the frame around the subject is uploaded,
 shrunk to at most :data:`MAX_TEXTURE_SIDE` pixels.
 """
@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from gaitcore.project import FootageFit, Silhouettes
-from gaitcore.skeleton import Skeleton
+from gaitcore.project.document import FootageFit, Silhouettes
+from gaitcore.rig.skeleton import Skeleton
 
 MAX_TEXTURE_SIDE = 512
 CONTEXT = 1.6

@@ -27,10 +27,17 @@ from OpenGL import GL
 from pyqtgraph.opengl import shaders
 from pyqtgraph.opengl.GLViewWidget import GLViewMixin
 from PySide6.QtCore import Qt, Signal
+from PySide6.QtGui import (
+    QGuiApplication,
+    QImage,
+    QMatrix4x4,
+    QOffscreenSurface,
+    QOpenGLContext,
+    QVector3D,
+)
 from PySide6.QtOpenGL import QOpenGLFramebufferObject, QOpenGLWindow
-from PySide6.QtGui import QGuiApplication, QImage, QMatrix4x4, QOpenGLContext, QOffscreenSurface, QVector3D
 
-from gaitcore.skeleton import Skeleton
+from gaitcore.rig.skeleton import Skeleton
 
 PICK_RADIUS_PX = 9.0
 DRAG_START_PX = 12.0

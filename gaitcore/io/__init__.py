@@ -1,1 +1,2 @@
-"""File formats: pose tables (CSV), analysis results (JSON), and later BVH and glTF."""
+"""Interchange formats, one module (or package) per format owning both directions: pose tables
+(CSV), analysis results (JSON), BVH, glTF, and the exporters table."""

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcore.analysis.analyze import Analysis
 from gaitcore.errors import GaitInputError
-from gaitcore.pipeline import Analysis
 
 FORMAT = "gaitstudio-analysis"
 VERSION = 1

@@ -17,8 +17,7 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 from gaitcore.io.pose_table import PoseTable, pose_matrix, write_pose_table
 from gaitcore.progress import Progress, report
-from gaitcore.skeleton import Skeleton
-
+from gaitcore.rig.skeleton import Skeleton
 
 
 @dataclass(frozen=True)
@@ -46,7 +45,7 @@ def _write_csv(path: Path, skeleton: Skeleton | None, table: PoseTable, fps: flo
 
 
 def _write_bvh(path: Path, skeleton: Skeleton | None, table: PoseTable, fps: float) -> None:
-    from gaitcore.io.bvh import write_bvh
+    from gaitcore.io.bvh.writer import write_bvh
 
     write_bvh(path, skeleton, table, fps=fps)
 
@@ -176,7 +175,7 @@ def write_preview_video(path: str | Path, footage_frames: Iterable[np.ndarray],
     """
     import cv2
 
-    from gaitcore.synth.render import SkeletonRenderer
+    from gaitcore.rig.render import SkeletonRenderer
 
     p = np.asarray(poses, dtype=float)
     if p.ndim != 2 or p.shape[0] == 0:

@@ -19,7 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from gaitcore.errors import GaitInputError
-from gaitcore.skeleton import CHANNEL_ORDER, Skeleton
+from gaitcore.rig.rotations import quaternions_zxy
+from gaitcore.rig.skeleton import CHANNEL_ORDER, Skeleton
 
 GLB_MAGIC = 0x46546C67  # b"glTF"
 CHUNK_JSON = 0x4E4F534A
@@ -104,32 +105,6 @@ def write_glb(path: str | Path, skeleton: Skeleton, poses: np.ndarray, fps: floa
     gltf.doc["scene"] = 0
     gltf.doc["animations"] = [_animation(gltf, skeleton, params, fps)]
     gltf.write(Path(path))
-
-
-def quaternions_zxy(angles_deg: np.ndarray) -> np.ndarray:
-    """Unit quaternions (x, y, z, w) of ``R = Rz(rz) @ Rx(rx) @ Ry(ry)``.
-
-    Parameters
-    ----------
-    angles_deg : ndarray of shape (..., 3)
-        (rz, rx, ry) in degrees.
-
-    Returns
-    -------
-    ndarray of shape (..., 4)
-        glTF order: vector part first, scalar last.
-    """
-    half = np.radians(np.asarray(angles_deg, float)) / 2
-    cz, sz = np.cos(half[..., 0]), np.sin(half[..., 0])
-    cx, sx = np.cos(half[..., 1]), np.sin(half[..., 1])
-    cy, sy = np.cos(half[..., 2]), np.sin(half[..., 2])
-    # (0, 0, sz, cz) * (sx, 0, 0, cx) * (0, sy, 0, cy), Hamilton products written out
-    return np.stack([
-        cz * sx * cy - sz * cx * sy,
-        cz * cx * sy + sz * sx * cy,
-        sz * cx * cy + cz * sx * sy,
-        cz * cx * cy - sz * sx * sy,
-    ], axis=-1)
 
 
 def _animation(gltf: _Document, skeleton: Skeleton, params: np.ndarray, fps: float) -> dict:

@@ -16,7 +16,7 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 
 if TYPE_CHECKING:
-    from gaitcore.skeleton import Skeleton
+    from gaitcore.rig.skeleton import Skeleton
 
 MAX_LISTED = 12
 """Missing channels named in an error message before '... and N more'."""
@@ -119,7 +119,7 @@ def write_pose_table(path: str | Path, table: PoseTable, *, fps: float | None = 
             w.writerow(lead + [repr(float(v)) for v in row])
 
 
-def pose_matrix(skeleton: "Skeleton", table: PoseTable) -> np.ndarray:
+def pose_matrix(skeleton: Skeleton, table: PoseTable) -> np.ndarray:
     """The table's values re-ordered as ``skeleton.channel_names``, shape (n, k).
 
     Raises

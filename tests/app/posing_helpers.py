@@ -25,7 +25,7 @@ def open_demo(qtbot, window, clip, *, switching: bool = False) -> None:
 def true_poses(skeleton, n_frames: int = 100) -> np.ndarray:
     """The poses the demo clip was rendered with."""
     from app.demo import DEMO_GAIT
-    from gaitcore.synth import generate_gait
+    from gaitcore.bench import generate_gait
 
     return generate_gait(skeleton, DEMO_GAIT, n_frames)
 

@@ -7,11 +7,16 @@ from dataclasses import replace
 import pytest
 
 from app.commands import (
-    AddRectCommand, AddStrokesCommand, ChangeSettingsCommand, EraseStrokesCommand,
-    ForbidKeyCommand, PinKeyCommand, RemoveRectCommand,
+    AddRectCommand,
+    AddStrokesCommand,
+    ChangeSettingsCommand,
+    EraseStrokesCommand,
+    ForbidKeyCommand,
+    PinKeyCommand,
+    RemoveRectCommand,
 )
 from app.state import AppState
-from gaitcore.model import Rect, Stroke
+from gaitcore.silhouettes.annotations import Rect, Stroke
 
 
 @pytest.fixture

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 import pytest
 
-from gaitcore.io.project_file import load_project
+from gaitcore.project.storage import load_project
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -7,15 +7,15 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from PySide6.QtCore import QPoint, QTimer, Qt
+from PySide6.QtCore import QPoint, Qt, QTimer
 from PySide6.QtWidgets import QApplication, QPushButton
 
-import gaitcore.image_pca as image_pca
+import gaitcore.analysis.image_pca as image_pca
 from app.widgets.frame_canvas import Tool
 from app.workers import ProgressDialog
-from gaitcore.io.project_file import load_project
-from gaitcore.project import Silhouettes
-from gaitcore.silhouette import crop_rois
+from gaitcore.project.document import Silhouettes
+from gaitcore.project.storage import load_project
+from gaitcore.silhouettes.tracking import crop_rois
 from tests.app.conftest import viewport_pos, wait_ready
 from tests.gaitcore.walker import walker_clip
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gaitcore.io.bvh import write_bvh
+from gaitcore.io.bvh.writer import write_bvh
 from gaitcore.io.pose_table import PoseTable, write_pose_table
 from tests.app.posing_helpers import open_demo, true_poses
 

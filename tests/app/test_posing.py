@@ -8,7 +8,7 @@ import pytest
 from app.export import export_fps
 from gaitcore import cli
 from gaitcore.io.analysis_file import write_analysis_json
-from gaitcore.io.bvh_reader import read_bvh
+from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.pose_table import PoseTable, read_pose_table, write_pose_table
 from tests.app.posing_helpers import open_demo, pose_with_spin_boxes, true_poses
 

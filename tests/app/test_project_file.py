@@ -7,14 +7,18 @@ import json
 import numpy as np
 import pytest
 
+from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.errors import GaitInputError
-from gaitcore.io.project_file import (
-    VERSION, load_project, missing_footage, save_project, sidecar_dir,
+from gaitcore.project.document import AnimationOptions, FootageFit, Project, Silhouettes
+from gaitcore.project.storage import (
+    VERSION,
+    load_project,
+    missing_footage,
+    save_project,
+    sidecar_dir,
 )
-from gaitcore.model import Rect, Stroke
-from gaitcore.pipeline import AnalysisSettings
-from gaitcore.project import AnimationOptions, FootageFit, Project, Silhouettes
-from gaitcore.silhouette import RoiClip
+from gaitcore.silhouettes.annotations import Rect, Stroke
+from gaitcore.silhouettes.tracking import RoiClip
 
 
 def make_project(footage) -> Project:
@@ -159,7 +163,7 @@ def test_pinning_a_dropped_frame_allows_it():
 
 
 def test_the_posed_skeleton_and_poses_survive_a_round_trip(tmp_path):
-    from gaitcore.skeleton import load_template
+    from gaitcore.rig.skeleton import load_template
 
     skeleton = load_template("horse")
     pose = np.linspace(-5, 5, skeleton.n_channels)

@@ -10,8 +10,8 @@ from pathlib import Path
 
 from app.autosave import find_recovery_copies
 from app.commands import AddRectCommand
-from gaitcore.io.project_file import load_project
-from gaitcore.model import Rect
+from gaitcore.project.storage import load_project
+from gaitcore.silhouettes.annotations import Rect
 from tests.app.conftest import wait_ready
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -24,8 +24,8 @@ CRASHING_SESSION = textwrap.dedent(
     from app.autosave import Autosaver
     from app.commands import AddRectCommand
     from app.state import AppState
-    from gaitcore.model import Rect
-    from gaitcore.project import Project
+    from gaitcore.silhouettes.annotations import Rect
+    from gaitcore.project.document import Project
 
     app = QCoreApplication([])
     state = AppState()

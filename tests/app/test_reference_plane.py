@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from app.widgets.reference_plane import reference_image, skeleton_extent
-from gaitcore.project import FootageFit, Silhouettes
-from gaitcore.silhouette import crop_rois
-from gaitcore.skeleton import load_template
+from gaitcore.project.document import FootageFit, Silhouettes
+from gaitcore.rig.skeleton import load_template
+from gaitcore.silhouettes.tracking import crop_rois
 from tests.gaitcore.walker import walker_clip
 
 

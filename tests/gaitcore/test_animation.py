@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from gaitcore import GaitInputError
-from gaitcore.animation import interpolation_weights, loop_cycle
-from gaitcore.pipeline import animate
-from gaitcore.switching import loop_angle, propose_alternates
+from gaitcore.analysis.alternates import loop_angle, propose_alternates
+from gaitcore.animation.animate import animate
+from gaitcore.animation.weights import interpolation_weights, loop_cycle
 
 
 def _loop(n=120, period=40.0, turns_per_cycle=1):

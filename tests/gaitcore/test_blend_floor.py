@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from gaitcore.blend_floor import MAX_SETS, best_blend_floor, blend_floor
+from gaitcore.bench.blend_floor import MAX_SETS, best_blend_floor, blend_floor
 from gaitcore.errors import GaitInputError
 
 
@@ -58,8 +58,8 @@ def test_lower_bound_never_exceeds_the_exact_floor(seed, n, k, m):
 
 
 def test_bound_is_close_on_a_gait():
-    from gaitcore.skeleton import load_template
-    from gaitcore.synth.gaits import generate_gait
+    from gaitcore.bench.gaits import generate_gait
+    from gaitcore.rig.skeleton import load_template
 
     horse = load_template("horse")
     truth = generate_gait(horse, "gallop", 48, period_frames=12)[:, horse.sagittal_angle_indices]

@@ -4,10 +4,11 @@ import numpy as np
 import pytest
 
 from gaitcore import GaitInputError
-from gaitcore.io.bvh import write_bvh
+from gaitcore.bench.gaits import generate_gait
+from gaitcore.io.bvh.writer import write_bvh
 from gaitcore.io.pose_table import PoseTable
-from gaitcore.skeleton import euler_zxy_matrix, load_template
-from gaitcore.synth.gaits import generate_gait
+from gaitcore.rig.rotations import euler_zxy_matrix
+from gaitcore.rig.skeleton import load_template
 
 bvhio = pytest.importorskip("bvhio")
 

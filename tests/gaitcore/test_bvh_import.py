@@ -9,12 +9,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
+from gaitcore.bench.gaits import generate_gait
 from gaitcore.errors import GaitInputError
-from gaitcore.io.bvh import write_bvh
-from gaitcore.io.bvh_reader import read_bvh, zxy_from_matrix
+from gaitcore.io.bvh.reader import read_bvh
+from gaitcore.io.bvh.writer import write_bvh
 from gaitcore.io.pose_table import PoseTable
-from gaitcore.skeleton import Skeleton, euler_zxy_matrix, load_template
-from gaitcore.synth.gaits import generate_gait
+from gaitcore.rig.rotations import euler_zxy_matrix, zxy_from_matrix
+from gaitcore.rig.skeleton import Skeleton, load_template
 
 HORSE = load_template("horse")
 

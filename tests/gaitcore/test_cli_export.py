@@ -16,10 +16,10 @@ import trimesh
 from gaitcore.cli import main
 from gaitcore.errors import GaitInputError
 from gaitcore.io import export
-from gaitcore.io.bvh_reader import read_bvh
+from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.export import EXPORTERS, export_animation, write_preview_video
 from gaitcore.io.pose_table import PoseTable, read_pose_table
-from gaitcore.skeleton import load_template
+from gaitcore.rig.skeleton import load_template
 from tests.gaitcore.walker import walker_clip, write_mask_folder
 
 bvhio = pytest.importorskip("bvhio")

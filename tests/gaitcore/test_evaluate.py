@@ -10,12 +10,12 @@ import json
 
 import pytest
 
-from gaitcore.blend_floor import best_blend_floor
+from gaitcore.bench.blend_floor import best_blend_floor
+from gaitcore.bench.evaluate import BenchSettings, evaluate_gait
+from gaitcore.bench.gaits import generate_gait
 from gaitcore.cli import main
 from gaitcore.errors import GaitInputError
-from gaitcore.evaluate import BenchSettings, evaluate_gait
-from gaitcore.skeleton import load_template
-from gaitcore.synth.gaits import generate_gait
+from gaitcore.rig.skeleton import load_template
 
 pytestmark = pytest.mark.gl
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from gaitcore.errors import GaitInputError
-from gaitcore.frames import open_frames
-from gaitcore.image_folder import iter_mask_folder, read_mask_folder
-from gaitcore.model import Rect, Stroke
+from gaitcore.footage.image_folder import iter_mask_folder, read_mask_folder
+from gaitcore.footage.sources import open_frames
+from gaitcore.silhouettes.annotations import Rect, Stroke
 
 W, H = 64, 48
 

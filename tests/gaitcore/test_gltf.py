@@ -10,10 +10,11 @@ import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
+from gaitcore.bench.gaits import generate_gait
 from gaitcore.errors import GaitInputError
-from gaitcore.io.gltf import quaternions_zxy, write_glb
-from gaitcore.skeleton import Skeleton, euler_zxy_matrix, load_template
-from gaitcore.synth.gaits import generate_gait
+from gaitcore.io.gltf import write_glb
+from gaitcore.rig.rotations import euler_zxy_matrix, quaternions_zxy
+from gaitcore.rig.skeleton import Skeleton, load_template
 
 HORSE = load_template("horse")
 N_FRAMES, FPS = 30, 25.0

@@ -91,7 +91,7 @@ def test_keeps_at_most_the_available_components():
 
 
 def test_streamed_randomized_svd_matches_the_dense_route(monkeypatch):
-    import gaitcore.image_pca as module
+    import gaitcore.analysis.image_pca as module
 
     imgs = _moving_bar(300, (24, 30)).astype(np.uint8) * 255
     rng = np.random.default_rng(4)
@@ -107,7 +107,7 @@ def test_streamed_randomized_svd_matches_the_dense_route(monkeypatch):
 
 @pytest.mark.parametrize("limit", [None, 1000])
 def test_progress_reaches_the_end_and_changes_nothing(monkeypatch, limit):
-    import gaitcore.image_pca as module
+    import gaitcore.analysis.image_pca as module
 
     imgs = _moving_bar(1100, (12, 16))
     if limit is not None:  # the streamed route: 3 chunks of frames, 13 passes
@@ -123,7 +123,7 @@ def test_progress_reaches_the_end_and_changes_nothing(monkeypatch, limit):
 
 @pytest.mark.parametrize("limit", [None, 1000])
 def test_progress_returning_false_cancels(monkeypatch, limit):
-    import gaitcore.image_pca as module
+    import gaitcore.analysis.image_pca as module
 
     if limit is not None:
         monkeypatch.setattr(module, "DENSE_LIMIT", limit)

@@ -9,8 +9,8 @@ from math import comb, log
 import numpy as np
 import pytest
 
+from gaitcore.analysis.keyimages import KeySelection, condition_curve, select_key_images
 from gaitcore.errors import GaitInputError
-from gaitcore.keyimages import KeySelection, condition_curve, select_key_images
 
 ALPHA = log(2.0)
 
@@ -91,7 +91,7 @@ def _first_allowed_only(kernel, m, pinned, pool, starts, deadline):
 
 @pytest.mark.parametrize("seed", range(2))
 def test_exact_search_does_not_rely_on_a_good_starting_set(seed, monkeypatch):
-    monkeypatch.setattr("gaitcore.keyimages._local_search", _first_allowed_only)
+    monkeypatch.setattr("gaitcore.analysis.keyimages._local_search", _first_allowed_only)
     rng = np.random.default_rng(2000 + seed)
     for _ in range(60):
         points, m = _random_case(rng)
@@ -102,7 +102,7 @@ def test_exact_search_does_not_rely_on_a_good_starting_set(seed, monkeypatch):
 @pytest.mark.parametrize("seed", range(2))
 def test_pinned_and_forbidden_frames_are_honoured_and_optimal(seed, poor_start, monkeypatch):
     if poor_start:
-        monkeypatch.setattr("gaitcore.keyimages._local_search", _first_allowed_only)
+        monkeypatch.setattr("gaitcore.analysis.keyimages._local_search", _first_allowed_only)
     rng = np.random.default_rng(3000 + seed)
     for _ in range(25):
         points, m = _random_case(rng)
@@ -242,8 +242,8 @@ def test_benchmark_sized_clip_is_exact_and_matches_a_sampled_lower_bound():
 def test_branching_above_the_levelwise_depth_is_exact(max_level_rows, monkeypatch):
     # m >= 6 branches on its first frames before growing sets level by level; with a tiny
     # memory guard the level-wise searches give up and branch further.
-    monkeypatch.setattr("gaitcore.keyimages._local_search", _first_allowed_only)
-    monkeypatch.setattr("gaitcore.keyimages._MAX_LEVEL_ROWS", max_level_rows)
+    monkeypatch.setattr("gaitcore.analysis.keyimages._local_search", _first_allowed_only)
+    monkeypatch.setattr("gaitcore.analysis.keyimages._MAX_LEVEL_ROWS", max_level_rows)
     rng = np.random.default_rng(4000 + max_level_rows)
     for _ in range(4):
         n, m = int(rng.integers(9, 15)), int(rng.integers(6, 8))

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import gaitcore.image_pca as image_pca
-from gaitcore.pipeline import AnalysisSettings, analyze_silhouettes
-from gaitcore.silhouette import crop_rois
+import gaitcore.analysis.image_pca as image_pca
+from gaitcore.analysis.analyze import AnalysisSettings, analyze_silhouettes
+from gaitcore.silhouettes.tracking import crop_rois
 from tests.gaitcore.walker import walker_clip
 
 

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from gaitcore import GaitInputError, RBFPoseMap
-from gaitcore.rbf import gaussian_kernel
+from gaitcore.analysis.kernel import gaussian_kernel
 
 
 def test_kernel_is_half_at_unit_distance():

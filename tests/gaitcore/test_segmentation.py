@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from gaitcore.errors import GaitInputError
-from gaitcore.frames import open_frames
-from gaitcore.image_folder import read_mask_folder
-from gaitcore.model import Rect
-from gaitcore.segmentation import (
+from gaitcore.footage.image_folder import read_mask_folder
+from gaitcore.footage.sources import open_frames
+from gaitcore.silhouettes.annotations import Rect
+from gaitcore.silhouettes.segmentation import (
     ColourModel,
     SegmentationSettings,
     segment_clip,

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from gaitcore.errors import GaitInputError
-from gaitcore.silhouette import (
+from gaitcore.silhouettes.tracking import (
     RoiAccumulator,
     SubjectTracker,
     crop_rois,
@@ -128,7 +128,7 @@ def test_stabilize_rois_follows_the_travel_not_the_stride():
     for t in range(n):
         x = 20 + 2 * t + int(round(4 * np.sin(2 * np.pi * t / period)))
         masks[t, 20:40, x : x + 30] = True
-    from gaitcore.silhouette import stabilize_rois
+    from gaitcore.silhouettes.tracking import stabilize_rois
 
     roi = crop_rois(masks)
     stable = stabilize_rois(roi, period)

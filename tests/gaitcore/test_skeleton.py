@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from gaitcore.errors import GaitInputError
-from gaitcore.skeleton import Skeleton, euler_zxy_matrix, load_template
+from gaitcore.rig.rotations import euler_zxy_matrix
+from gaitcore.rig.skeleton import Skeleton, load_template
 
 
 @pytest.fixture(scope="module")

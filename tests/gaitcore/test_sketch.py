@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from gaitcore.errors import GaitInputError
-from gaitcore.model import Stroke
-from gaitcore.sketch import (
+from gaitcore.silhouettes.annotations import Stroke
+from gaitcore.silhouettes.sketch import (
     carry_strokes,
     crop_sketches,
     propagate_strokes,

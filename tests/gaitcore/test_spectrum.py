@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from gaitcore.analysis.spectrum import Diagnosis, Verdict, band_pass, diagnose, fisher_periodicity_p
 from gaitcore.errors import GaitInputError
-from gaitcore.spectrum import Diagnosis, Verdict, band_pass, diagnose, fisher_periodicity_p
 
 
 def two_phase(n: int, period: float, *, phase: float = 0.3, extra: int = 3, seed: int = 0):

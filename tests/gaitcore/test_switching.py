@@ -2,9 +2,10 @@ import numpy as np
 import pytest
 
 from gaitcore import GaitInputError
-from gaitcore.keyimages import select_key_images
-from gaitcore.rbf import RBFPoseMap
-from gaitcore.switching import SwitchingModel, loop_angle, propose_alternates, switching_sets
+from gaitcore.analysis.alternates import loop_angle, propose_alternates
+from gaitcore.analysis.keyimages import select_key_images
+from gaitcore.animation.rbf import RBFPoseMap
+from gaitcore.animation.switching import SwitchingModel, switching_sets
 
 
 def test_sets_are_the_papers_sigma():

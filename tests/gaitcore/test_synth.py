@@ -10,10 +10,10 @@ import cv2
 import numpy as np
 import pytest
 
+from gaitcore.bench import GAITS, generate_gait
+from gaitcore.bench.synth_command import add_parser
 from gaitcore.errors import GaitInputError
-from gaitcore.skeleton import Skeleton, load_template
-from gaitcore.synth import GAITS, generate_gait
-from gaitcore.synth.command import add_parser
+from gaitcore.rig.skeleton import Skeleton, load_template
 
 pytestmark = pytest.mark.gl
 
@@ -25,7 +25,7 @@ def horse() -> Skeleton:
 
 @pytest.fixture(scope="module")
 def walk_clip(horse):
-    from gaitcore.synth.render import render_clip
+    from gaitcore.rig.render import render_clip
 
     poses = generate_gait(horse, "walk", 80)[::10]  # two cycles, 8 frames
     return poses, *render_clip(horse, poses, width=160, height=120)
@@ -58,7 +58,7 @@ def test_silhouette_moves_but_camera_follows(walk_clip):
 
 
 def test_camera_offsets_change_the_view(horse):
-    from gaitcore.synth.render import SkeletonRenderer
+    from gaitcore.rig.render import SkeletonRenderer
 
     pose = horse.rest_pose()
     with SkeletonRenderer(horse, width=96, height=72) as side:
@@ -74,7 +74,7 @@ def test_camera_offsets_change_the_view(horse):
 
 
 def test_progress_can_cancel(horse):
-    from gaitcore.synth.render import render_clip
+    from gaitcore.rig.render import render_clip
 
     seen = []
 
@@ -90,7 +90,7 @@ def test_progress_can_cancel(horse):
 
 def test_contact_sheet(horse, artifacts_dir):
     """Four frames per gait, one row each, for a person to look at."""
-    from gaitcore.synth.render import render_clip
+    from gaitcore.rig.render import render_clip
 
     rows, clips = [], []
     for gait, spec in GAITS.items():

@@ -1,6 +1,6 @@
 """A tiny procedural 2-D walker for tests: an ellipse body with four swinging legs.
 
-Not a substitute for the rendered synthetic bench (gaitcore.synth); it only gives tests a
+Not a substitute for the rendered synthetic bench (gaitcore.bench); it only gives tests a
 fast, seeded, periodic clip of binary masks with a known period.
 """
 

@@ -1,0 +1,395 @@
+"""Frame sources: video files, animated GIFs and folders of images (paper Section 2.2 input).
+
+A :class:`FrameSource` gives random access to the frames of a clip, with a small bounded
+cache, and streams them in order without holding the clip in memory. ``open_frames`` picks
+the backend from the path; every failure to read becomes a one-line ``GaitInputError``.
+
+Frames are BGR ``uint8`` arrays of shape (rows, cols, 3), numbered from 0 at the first frame
+of the (possibly trimmed) clip; ``FrameSource.source_index`` maps back to the file.
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+import threading
+from collections import OrderedDict
+from collections.abc import Iterator
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from gaitcore.errors import GaitInputError
+from gaitcore.footage.image_folder import (
+    check_folder_sizes,
+    check_size,
+    list_image_files,
+    read_image,
+)
+
+
+class _VideoReader:
+    """Sequential decoder over one ``cv2.VideoCapture`` that seeks only when it must."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.cap = cv2.VideoCapture(str(path))
+        if not self.cap.isOpened():
+            if path.suffix.lower() == ".gif":
+                raise GaitInputError(
+                    f"cannot open GIF {path}: it is damaged, or this OpenCV has no FFmpeg "
+                    "backend (needed for GIF); export its frames (ffmpeg -i IN.gif %05d.png) "
+                    "and open the folder"
+                )
+            raise GaitInputError(
+                f"cannot open video {path}: the file is truncated, damaged or in a container "
+                "OpenCV cannot read; re-encode it (e.g. ffmpeg -i IN -c:v libx264 OUT.mp4)"
+            )
+        self.next_index = 0
+
+    def read(self, index: int) -> np.ndarray | None:
+        if index != self.next_index:
+            self.cap.set(cv2.CAP_PROP_POS_FRAMES, index)
+        ok, frame = self.cap.read()
+        self.next_index = index + 1 if ok else -1
+        return frame if ok else None
+
+    def close(self) -> None:
+        self.cap.release()
+
+
+class FrameSource:
+    """Frames of a clip with random access, a bounded cache and streaming iteration.
+
+    Use :func:`open_frames` to make one.
+
+    Attributes
+    ----------
+    path : Path
+        The video file or image folder.
+    start, stop : int
+        The clip is source frames ``start`` (included) to ``stop`` (excluded).
+    fps : float or None
+        Frame rate from the video header; None for image folders unless given.
+
+    Notes
+    -----
+    Thread safety: ``frame`` may be called from one thread while another iterates, because
+    iteration opens its own decoder.
+    """
+
+    def __init__(
+        self,
+        path: Path,
+        *,
+        files: list[Path] | None,
+        n_source: int,
+        size: tuple[int, int],
+        fps: float | None,
+        start: int,
+        stop: int,
+        cache_frames: int,
+    ) -> None:
+        self.path = path
+        self._files = files
+        self.n_source = n_source
+        self._size = size
+        self.fps = fps
+        self.start = start
+        self.stop = stop
+        self._cache: OrderedDict[int, np.ndarray] = OrderedDict()
+        self._cache_frames = max(0, int(cache_frames))
+        self._lock = threading.Lock()
+        self._reader: _VideoReader | None = None
+
+    # -- basic properties -------------------------------------------------------------
+    def __len__(self) -> int:
+        return self.stop - self.start
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """Frame size as (width, height) in pixels."""
+        return self._size
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        """Shape of one frame array: (rows, cols, 3)."""
+        return self._size[1], self._size[0], 3
+
+    @property
+    def is_video(self) -> bool:
+        return self._files is None
+
+    def source_index(self, i: int) -> int:
+        """Index in the file or folder of clip frame ``i``."""
+        return self.start + i
+
+    def __repr__(self) -> str:
+        kind = "video" if self.is_video else "image folder"
+        return (
+            f"FrameSource({kind} {self.path.name!r}, frames {self.start}:{self.stop}, "
+            f"size {self._size[0]}x{self._size[1]}, fps {self.fps})"
+        )
+
+    # -- access -----------------------------------------------------------------------
+    def frame(self, i: int) -> np.ndarray:
+        """Return clip frame ``i`` (negative counts from the end).
+
+        Returns
+        -------
+        ndarray of shape (rows, cols, 3), uint8
+            BGR image. Treat it as read-only: it may be shared with the cache.
+
+        Raises
+        ------
+        IndexError
+            When ``i`` is outside the clip.
+        GaitInputError
+            When the frame cannot be decoded.
+        """
+        n = len(self)
+        if not -n <= i < n:
+            raise IndexError(f"frame {i} is outside the clip of {n} frames")
+        i = int(i) % n
+        with self._lock:
+            hit = self._cache.get(i)
+            if hit is not None:
+                self._cache.move_to_end(i)
+                return hit
+            if self._files is not None:
+                img = read_image(self._files[self.start + i], self._size)
+            else:
+                if self._reader is None:
+                    self._reader = _VideoReader(self.path)
+                img = self._reader.read(self.start + i)
+                if img is None:
+                    raise GaitInputError(
+                        f"frame {self.start + i} of {self.path} cannot be decoded: the file is "
+                        "truncated or damaged; trim the clip before it (stop=) or re-encode it"
+                    )
+                check_size(img, self._size, f"frame {self.start + i} of {self.path}")
+            img.flags.writeable = False
+            if self._cache_frames:
+                self._cache[i] = img
+                while len(self._cache) > self._cache_frames:
+                    self._cache.popitem(last=False)
+            return img
+
+    def __getitem__(self, i: int) -> np.ndarray:
+        return self.frame(i)
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        for _, img in self.iter_frames():
+            yield img
+
+    def iter_frames(
+        self, start: int = 0, stop: int | None = None, *, prefetch: int = 0
+    ) -> Iterator[tuple[int, np.ndarray]]:
+        """Stream ``(i, frame)`` for clip frames ``start <= i < stop`` in order.
+
+        Frames are decoded one at a time by a decoder of their own (not the random-access
+        one), so memory stays constant whatever the clip length.
+
+        Parameters
+        ----------
+        start, stop : int
+            Clip frame range (``stop=None``: to the end).
+        prefetch : int
+            When positive, decode on a background thread up to this many frames ahead, so
+            that decoding overlaps the caller's work (OpenCV releases the GIL).
+
+        Raises
+        ------
+        GaitInputError
+            When a frame cannot be decoded (truncated file).
+        """
+        if prefetch > 0:
+            return _prefetched(self._iter_frames(start, stop), prefetch)
+        return self._iter_frames(start, stop)
+
+    def _iter_frames(self, start: int, stop: int | None) -> Iterator[tuple[int, np.ndarray]]:
+        n = len(self)
+        stop = n if stop is None else min(int(stop), n)
+        start = max(0, int(start))
+        if self._files is not None:
+            for i in range(start, stop):
+                yield i, read_image(self._files[self.start + i], self._size)
+            return
+        reader = _VideoReader(self.path)
+        try:
+            if start + self.start:
+                reader.cap.set(cv2.CAP_PROP_POS_FRAMES, self.start + start)
+            for i in range(start, stop):
+                ok, img = reader.cap.read()
+                if not ok:
+                    raise GaitInputError(
+                        f"frame {self.start + i} of {self.path} cannot be decoded: the file is "
+                        f"truncated or damaged; trim the clip with stop={self.start + i} or "
+                        "re-encode it"
+                    )
+                check_size(img, self._size, f"frame {self.start + i} of {self.path}")
+                yield i, img
+        finally:
+            reader.close()
+
+    def close(self) -> None:
+        """Release the random-access decoder and empty the cache."""
+        with self._lock:
+            if self._reader is not None:
+                self._reader.close()
+                self._reader = None
+            self._cache.clear()
+
+    def __enter__(self) -> FrameSource:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def open_frames(
+    path: str | os.PathLike,
+    *,
+    start: int = 0,
+    stop: int | None = None,
+    fps: float | None = None,
+    cache_frames: int = 16,
+) -> FrameSource:
+    """Open a video file, an animated GIF or a folder of images as a clip.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        A video file (anything OpenCV's FFmpeg backend decodes, GIF included) or a folder of
+        images (PNG, JPEG, BMP, TIFF, WebP...) read in name order.
+    start, stop : int
+        Trim the clip to source frames ``start <= f < stop`` (``stop=None``: to the end),
+        e.g. to keep only the part showing the gait.
+    fps : float, optional
+        Frame rate to use instead of the file's (image folders have none).
+    cache_frames : int
+        How many decoded frames ``FrameSource.frame`` keeps (least recently used dropped).
+
+    Returns
+    -------
+    FrameSource
+
+    Raises
+    ------
+    GaitInputError
+        Missing path; unreadable, truncated or undecodable file; zero frames; empty folder;
+        non-image files or images of different sizes in a folder; a bad frame range.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise GaitInputError(f"{p} does not exist: give the path of a video file or image folder")
+    if p.is_dir():
+        files = list_image_files(p)
+        first = read_image(files[0], None)
+        size = (int(first.shape[1]), int(first.shape[0]))
+        check_folder_sizes(files, size)
+        n_source = len(files)
+        s0, s1 = _check_range(start, stop, n_source, p)
+        return FrameSource(p, files=files, n_source=n_source, size=size, fps=fps,
+                           start=s0, stop=s1, cache_frames=cache_frames)
+    return _open_video(p, start, stop, fps, cache_frames)
+
+
+# -- helpers ---------------------------------------------------------------------------
+def _prefetched(items: Iterator, depth: int) -> Iterator:
+    """Run ``items`` on a daemon thread, ``depth`` items ahead; errors reach the consumer."""
+    q: queue.Queue = queue.Queue(maxsize=depth)
+    stop = threading.Event()
+    done = object()
+
+    def work() -> None:
+        try:
+            for item in items:
+                while not stop.is_set():
+                    try:
+                        q.put(item, timeout=0.05)
+                        break
+                    except queue.Full:
+                        pass
+                if stop.is_set():
+                    break
+            else:
+                q.put(done)
+        except BaseException as exc:  # noqa: BLE001 - re-raised in the consuming thread
+            q.put(exc)
+        finally:
+            items.close()
+
+    thread = threading.Thread(target=work, name="gaitcore-decode", daemon=True)
+    thread.start()
+    try:
+        while (item := q.get()) is not done:
+            if isinstance(item, BaseException):
+                raise item
+            yield item
+    finally:
+        stop.set()
+        while thread.is_alive():  # unblock a producer waiting on a full queue
+            try:
+                q.get_nowait()
+            except queue.Empty:
+                thread.join(timeout=0.05)
+
+
+def _open_video(p: Path, start: int, stop: int | None, fps: float | None,
+                cache_frames: int) -> FrameSource:
+    reader = _VideoReader(p)
+    try:
+        cap = reader.cap
+        first = reader.read(0)
+        if first is None and int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 0:
+            raise GaitInputError(f"{p} holds no frames (an empty video): choose another file")
+        if first is None:
+            code = int(cap.get(cv2.CAP_PROP_FOURCC))
+            fourcc = "".join(chr((code >> (8 * k)) & 0xFF) for k in range(4)).strip("\0 ")
+            raise GaitInputError(
+                f"{p} opens but none of its frames decode (codec {fourcc or 'unknown'}, or no "
+                "video stream): re-encode it to H.264 or MJPEG, or export the frames as images"
+            )
+        size = (int(first.shape[1]), int(first.shape[0]))
+        header_fps = float(cap.get(cv2.CAP_PROP_FPS))
+        n_header = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+        n_source = n_header if n_header > 0 else _count_frames(reader)
+        s0, s1 = _check_range(start, stop, n_source, p)
+        # A header may promise frames that a truncated file no longer holds: check the last
+        # frame of the clip now rather than fail in the middle of an analysis.
+        if reader.read(s1 - 1) is None:
+            n_real = _count_frames(reader)
+            raise GaitInputError(
+                f"{p} is truncated: its header says {n_source} frames but only {n_real} decode; "
+                f"open it with stop={n_real} or re-encode it"
+            )
+    finally:
+        reader.close()
+    if fps is None and header_fps > 0 and np.isfinite(header_fps):
+        fps = header_fps
+    return FrameSource(p, files=None, n_source=n_source, size=size, fps=fps,
+                       start=s0, stop=s1, cache_frames=cache_frames)
+
+
+def _count_frames(reader: _VideoReader) -> int:
+    reader.cap.set(cv2.CAP_PROP_POS_FRAMES, 0)
+    n = 0
+    while reader.cap.grab():
+        n += 1
+    reader.next_index = -1
+    return n
+
+
+def _check_range(start: int, stop: int | None, n: int, p: Path) -> tuple[int, int]:
+    if n <= 0:
+        raise GaitInputError(f"{p} holds no frames: choose another file")
+    s1 = n if stop is None else int(stop)
+    s0 = int(start)
+    if not 0 <= s0 < s1 <= n:
+        raise GaitInputError(
+            f"frame range {start}:{stop} does not fit {p}, which has {n} frames: "
+            f"choose 0 <= start < stop <= {n}"
+        )
+    return s0, s1

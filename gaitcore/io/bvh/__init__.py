@@ -1,0 +1,1 @@
+"""BVH (Biovision hierarchy): reading any rig an artist brings, writing our animation."""

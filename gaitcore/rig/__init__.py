@@ -1,0 +1,1 @@
+"""The rig: joint hierarchies and forward kinematics, rotations, and the ellipsoid renderer."""

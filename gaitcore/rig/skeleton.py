@@ -1,0 +1,507 @@
+"""Joint hierarchies: loading, forward kinematics, mirroring and bone shapes.
+
+Conventions, fixed for the whole package:
+
+- lengths in metres; Y up, X the direction of travel, Z lateral. The side camera sits on +Z
+  and looks along -Z, so the image plane is XY and Z is perpendicular to it. An animal facing
+  +X has its right side on +Z ("R" joints), facing the camera.
+- every joint has a local frame: ``world(j) = world(parent) @ T(offset) @ R`` with
+  ``R = Rz(rz) @ Rx(rx) @ Ry(ry)`` (BVH "Zrotation Xrotation Yrotation"), angles in degrees.
+  The root also translates: its position is ``offset + (tx, ty, tz)``, so the all-zero pose is
+  the rest pose of the template.
+- a pose is a flat float vector laid out as :attr:`Skeleton.channel_names`, e.g.
+  ``["root.tx", "root.ty", "root.tz", "root.rz", "root.rx", "root.ry", "spine1.rz", ...]``.
+
+The JSON file format (``"format": "gaitstudio-skeleton"``, ``"version": 1``) is documented in
+:meth:`Skeleton.from_json`.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from importlib.resources import files
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gaitcore.errors import GaitInputError
+from gaitcore.rig.rotations import euler_zxy_matrix
+
+FORMAT = "gaitstudio-skeleton"
+VERSION = 1
+CHANNEL_ORDER = ("tx", "ty", "tz", "rz", "rx", "ry")
+"""Allowed channels in the order they must appear; rotations compose as Rz @ Rx @ Ry."""
+ROTATION_CHANNELS = ("rz", "rx", "ry")
+BONE_LENGTH_SCALE = 1.1
+BONE_END_ROUNDING = 0.6
+"""A bone ellipsoid's half-length along the bone is BONE_LENGTH_SCALE * length / 2 plus
+BONE_END_ROUNDING * its smaller radius, so that neighbouring ellipsoids overlap at the joints
+and thick short bones (the trunk) merge into one body instead of a string of discs."""
+
+
+@dataclass(frozen=True)
+class Joint:
+    """One joint of a skeleton, as stored in the JSON file.
+
+    Attributes
+    ----------
+    name : str
+    parent : str or None
+        None for the root only.
+    offset : tuple of 3 float
+        Position of the joint in its parent's frame at rest, metres (the root's rest position
+        in the world).
+    channels : tuple of str
+        Subset of ``("tx", "ty", "tz", "rz", "rx", "ry")`` in that order; translations only on
+        the root; empty for end sites.
+    limits : dict of str to (float, float)
+        Optional (lower, upper) bounds in degrees per rotation channel.
+    side : {"L", "R", "C"}
+        Left (-Z), right (+Z, facing the side camera) or centre.
+    mirror : str or None
+        Name of the joint on the other side (required for "L"/"R" joints).
+    bone_radii : tuple of 2 float or None
+        Half-widths (in the XY plane, along Z) of the ellipsoid drawn for the bone from the
+        parent to this joint, metres; None when the bone is not drawn.
+    bone_color : tuple of 3 float
+        RGB in [0, 1] of that ellipsoid.
+    """
+
+    name: str
+    parent: str | None
+    offset: tuple[float, float, float]
+    channels: tuple[str, ...]
+    limits: dict[str, tuple[float, float]] = field(default_factory=dict)
+    side: str = "C"
+    mirror: str | None = None
+    bone_radii: tuple[float, float] | None = None
+    bone_color: tuple[float, float, float] = (0.5, 0.5, 0.5)
+
+
+@dataclass(frozen=True)
+class BoneEllipsoid:
+    """An ellipsoid drawn for one bone, riding rigidly on the frame of ``joint``.
+
+    Attributes
+    ----------
+    joint : int
+        Index of the joint whose world transform carries the ellipsoid (the bone's parent end).
+    child : int
+        Index of the joint at the other end of the bone.
+    center : ndarray of shape (3,)
+        Centre in the joint's local frame, metres.
+    axes : ndarray of shape (3, 3)
+        Unit semi-axis directions as columns (along the bone, in-plane normal, lateral).
+    radii : ndarray of shape (3,)
+        Semi-axis lengths, metres.
+    color : tuple of 3 float
+    """
+
+    joint: int
+    child: int
+    center: np.ndarray
+    axes: np.ndarray
+    radii: np.ndarray
+    color: tuple[float, float, float]
+
+
+@dataclass(frozen=True, eq=False)
+class Skeleton:
+    """A validated joint hierarchy (parents listed before children).
+
+    Build one with :meth:`from_json` or :func:`load_template`.
+
+    Attributes
+    ----------
+    name : str
+    joints : tuple of Joint
+    channel_names : tuple of str
+        ``"<joint>.<channel>"`` for every channel, in pose-vector order.
+    parents : ndarray of int, shape (J,)
+        Parent index per joint, -1 for the root.
+    offsets : ndarray of shape (J, 3)
+    """
+
+    name: str
+    joints: tuple[Joint, ...]
+    channel_names: tuple[str, ...] = field(init=False)
+    parents: np.ndarray = field(init=False, repr=False)
+    offsets: np.ndarray = field(init=False, repr=False)
+    _chan_joint: np.ndarray = field(init=False, repr=False)
+    _chan_slot: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        _validate(self.joints)
+        index = {j.name: i for i, j in enumerate(self.joints)}
+        names, cj, cs = [], [], []
+        for i, joint in enumerate(self.joints):
+            for ch in joint.channels:
+                names.append(f"{joint.name}.{ch}")
+                cj.append(i)
+                cs.append(CHANNEL_ORDER.index(ch))  # slots 0..2 translation, 3..5 rz, rx, ry
+        parents = np.array([-1 if j.parent is None else index[j.parent] for j in self.joints])
+        object.__setattr__(self, "channel_names", tuple(names))
+        object.__setattr__(self, "parents", parents)
+        object.__setattr__(self, "offsets", np.array([j.offset for j in self.joints], float))
+        object.__setattr__(self, "_chan_joint", np.array(cj, dtype=int))
+        object.__setattr__(self, "_chan_slot", np.array(cs, dtype=int))
+
+    # ---------------------------------------------------------------- construction, I/O
+    @classmethod
+    def from_json(cls, source: str | Path | Mapping[str, Any]) -> Skeleton:
+        """Load a skeleton from a JSON file path or an already parsed mapping.
+
+        The document holds ``"format": "gaitstudio-skeleton"``, ``"version": 1``, ``"name"``
+        and ``"joints"``: a list, parents first, of objects with ``name``, ``parent`` (null for
+        the root), ``offset`` [x, y, z] in metres in the parent frame, ``channels`` (subset of
+        tx ty tz rz rx ry in that order), optional ``limits`` {"rz": [lo, hi], ...} in degrees,
+        ``side`` ("L", "R" or "C"), ``mirror`` (partner name for L/R joints) and optional
+        ``bone`` {"radii": [in_plane, lateral], "color": [r, g, b]} for the ellipsoid drawn
+        from the parent to the joint. Informative keys (units, axes) are checked when present.
+
+        Raises
+        ------
+        GaitInputError
+            Unreadable file, wrong format or version, or an invalid joint list (unknown
+            parent, cycle, duplicate name, bad channels, limits or mirror partners).
+        """
+        if isinstance(source, Mapping):
+            doc, where = source, "skeleton"
+        else:
+            path = Path(source)
+            try:
+                doc = json.loads(path.read_text(encoding="utf-8"))
+            except FileNotFoundError:
+                raise GaitInputError(f"skeleton file not found: {path}") from None
+            except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+                raise GaitInputError(f"cannot read skeleton file {path}: {exc}") from None
+            where = str(path)
+        if not isinstance(doc, Mapping):
+            raise GaitInputError(f"{where}: expected a JSON object with a 'joints' list")
+        if doc.get("format") != FORMAT or doc.get("version") != VERSION:
+            raise GaitInputError(
+                f"{where}: expected format {FORMAT!r} version {VERSION}, got "
+                f"{doc.get('format')!r} version {doc.get('version')!r}"
+            )
+        for key, want in (("units", "m"), ("up_axis", "Y"), ("forward_axis", "X"),
+                          ("rotation_order", "ZXY"), ("angle_units", "deg")):
+            if key in doc and doc[key] != want:
+                raise GaitInputError(f"{where}: {key} must be {want!r}, got {doc[key]!r}")
+        raw = doc.get("joints")
+        if not isinstance(raw, list) or not raw:
+            raise GaitInputError(f"{where}: 'joints' must be a non-empty list")
+        joints = tuple(_parse_joint(item, k, where) for k, item in enumerate(raw))
+        return cls(name=str(doc.get("name", "skeleton")), joints=joints)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document of this skeleton (see :meth:`from_json`)."""
+        out = []
+        for j in self.joints:
+            item: dict[str, Any] = {"name": j.name, "parent": j.parent,
+                                    "offset": list(j.offset), "channels": list(j.channels),
+                                    "side": j.side}
+            if j.mirror is not None:
+                item["mirror"] = j.mirror
+            if j.limits:
+                item["limits"] = {k: list(v) for k, v in j.limits.items()}
+            if j.bone_radii is not None:
+                item["bone"] = {"radii": list(j.bone_radii), "color": list(j.bone_color)}
+            out.append(item)
+        return {"format": FORMAT, "version": VERSION, "name": self.name, "units": "m",
+                "up_axis": "Y", "forward_axis": "X", "rotation_order": "ZXY",
+                "angle_units": "deg", "joints": out}
+
+    def to_json(self, path: str | Path | None = None) -> str:
+        """JSON text of :meth:`to_dict`, one joint per line; also written to ``path`` if given."""
+        doc = self.to_dict()
+        joints = doc.pop("joints")
+        head = json.dumps(doc, indent=2)[:-2]
+        body = ",\n".join("    " + json.dumps(j) for j in joints)
+        text = f'{head},\n  "joints": [\n{body}\n  ]\n}}\n'
+        if path is not None:
+            Path(path).write_text(text, encoding="utf-8")
+        return text
+
+    # ---------------------------------------------------------------- lookups
+    @property
+    def n_joints(self) -> int:
+        return len(self.joints)
+
+    @property
+    def n_channels(self) -> int:
+        return len(self.channel_names)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return tuple(j.name for j in self.joints)
+
+    def joint_index(self, name: str) -> int:
+        """Index of the joint called ``name``; GaitInputError if there is none."""
+        for i, j in enumerate(self.joints):
+            if j.name == name:
+                return i
+        raise GaitInputError(f"skeleton {self.name!r} has no joint {name!r}")
+
+    def channel_index(self, name: str) -> int:
+        """Index in the pose vector of channel ``name`` ("<joint>.<channel>")."""
+        try:
+            return self.channel_names.index(name)
+        except ValueError:
+            raise GaitInputError(f"skeleton {self.name!r} has no channel {name!r}") from None
+
+    def channel_indices(self, channel: str) -> np.ndarray:
+        """Pose-vector indices of every channel of one kind ("rz", "tx", ...), joint order."""
+        return np.array([i for i, n in enumerate(self.channel_names)
+                         if n.rsplit(".", 1)[1] == channel], dtype=int)
+
+    @property
+    def sagittal_angle_indices(self) -> np.ndarray:
+        """Indices of the angles about Z, the axis perpendicular to the side-view image.
+
+        These are the angles the paper's Section 4 evaluates (36 on its horse).
+        """
+        return self.channel_indices("rz")
+
+    def limits_array(self) -> np.ndarray:
+        """(k, 2) lower and upper bound per channel, degrees; +-inf where unbounded."""
+        lim = np.tile([-np.inf, np.inf], (self.n_channels, 1))
+        for i, name in enumerate(self.channel_names):
+            joint, ch = name.rsplit(".", 1)
+            bounds = self.joints[self.joint_index(joint)].limits.get(ch)
+            if bounds is not None:
+                lim[i] = bounds
+        return lim
+
+    def rest_pose(self) -> np.ndarray:
+        """The all-zero pose vector, shape (k,)."""
+        return np.zeros(self.n_channels)
+
+    # ---------------------------------------------------------------- kinematics
+    def forward_kinematics(self, poses: np.ndarray) -> np.ndarray:
+        """World transforms of every joint.
+
+        Parameters
+        ----------
+        poses : array_like of shape (k,) or (n, k)
+            Pose vectors (metres, degrees), laid out as :attr:`channel_names`.
+
+        Returns
+        -------
+        ndarray of shape (J, 4, 4) or (n, J, 4, 4)
+            Homogeneous joint-to-world transforms.
+
+        Raises
+        ------
+        GaitInputError
+            Wrong last dimension or non-finite values.
+        """
+        p = self._check_poses(poses)
+        single = p.ndim == 1
+        p = np.atleast_2d(p)
+        n = p.shape[0]
+        params = np.zeros((n, self.n_joints, 6))
+        params[:, self._chan_joint, self._chan_slot] = p
+        local = np.zeros((n, self.n_joints, 4, 4))
+        local[..., :3, :3] = euler_zxy_matrix(params[..., 3:])
+        local[..., :3, 3] = self.offsets + params[..., :3]
+        local[..., 3, 3] = 1.0
+        world = np.empty_like(local)
+        for j, parent in enumerate(self.parents):
+            world[:, j] = local[:, j] if parent < 0 else world[:, parent] @ local[:, j]
+        return world[0] if single else world
+
+    def joint_positions(self, poses: np.ndarray) -> np.ndarray:
+        """World joint positions, shape (J, 3) or (n, J, 3), metres."""
+        return self.forward_kinematics(poses)[..., :3, 3]
+
+    def mirror_pose(self, poses: np.ndarray) -> np.ndarray:
+        """Mirror poses about the sagittal plane (Z -> -Z), swapping left and right joints.
+
+        With R = Rz Rx Ry, reflecting Z keeps rz and negates rx, ry; root.tz is negated.
+
+        Parameters
+        ----------
+        poses : array_like of shape (k,) or (n, k)
+
+        Returns
+        -------
+        ndarray of the same shape
+        """
+        p = self._check_poses(poses)
+        perm, sign = self._mirror_map()
+        out = np.empty_like(p)
+        out[..., perm] = p * sign
+        return out
+
+    def bone_ellipsoids(self) -> tuple[BoneEllipsoid, ...]:
+        """The ellipsoids to draw, one per joint whose JSON entry has a ``bone``.
+
+        The ellipsoid of the bone parent -> joint is centred half-way along the bone in the
+        parent's frame, elongated along it (see BONE_LENGTH_SCALE, BONE_END_ROUNDING)
+        and carried by the parent's world transform.
+        """
+        out = []
+        for i, joint in enumerate(self.joints):
+            if joint.bone_radii is None:
+                continue
+            off = np.asarray(joint.offset, float)
+            length = float(np.linalg.norm(off))
+            along = off / length
+            ref = np.array([0.0, 0.0, 1.0]) if abs(along[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+            normal = np.cross(ref, along)
+            normal /= np.linalg.norm(normal)
+            lateral = np.cross(along, normal)
+            along_r = 0.5 * length * BONE_LENGTH_SCALE + BONE_END_ROUNDING * min(joint.bone_radii)
+            radii = np.array([along_r, *joint.bone_radii])
+            out.append(BoneEllipsoid(int(self.parents[i]), i, off / 2,
+                                     np.column_stack([along, normal, lateral]), radii,
+                                     tuple(joint.bone_color)))
+        return tuple(out)
+
+    # ---------------------------------------------------------------- helpers
+    def _check_poses(self, poses: np.ndarray) -> np.ndarray:
+        p = np.asarray(poses, dtype=float)
+        if p.ndim not in (1, 2) or p.shape[-1] != self.n_channels:
+            raise GaitInputError(
+                f"pose array has shape {p.shape}; skeleton {self.name!r} needs (k,) or (n, k) "
+                f"with k = {self.n_channels} channels"
+            )
+        if not np.all(np.isfinite(p)):
+            raise GaitInputError("pose array contains NaN or infinite values")
+        return p
+
+    def _mirror_map(self) -> tuple[np.ndarray, np.ndarray]:
+        perm = np.empty(self.n_channels, dtype=int)
+        sign = np.ones(self.n_channels)
+        for i, name in enumerate(self.channel_names):
+            joint, ch = name.rsplit(".", 1)
+            partner = self.joints[self.joint_index(joint)].mirror or joint
+            perm[i] = self.channel_index(f"{partner}.{ch}")
+            if ch in ("tz", "rx", "ry"):
+                sign[i] = -1.0
+        return perm, sign
+
+
+def load_template(name: str) -> Skeleton:
+    """Load a built-in skeleton template from ``resources/skeletons/<name>.json``.
+
+    The templates install inside the package (``gaitcore.resources``) and are read through
+    :mod:`importlib.resources`, so an installed wheel finds them as a checkout does.
+
+    Raises
+    ------
+    GaitInputError
+        No template of that name; the message lists the available ones.
+    """
+    folder = files("gaitcore.resources") / "skeletons"
+    path = folder / f"{name}.json"
+    if not path.is_file():
+        have = sorted(p.name.removesuffix(".json") for p in folder.iterdir())
+        raise GaitInputError(f"no skeleton template {name!r}; available: {', '.join(have)}")
+    return Skeleton.from_json(path)
+
+
+def _parse_joint(item: Any, k: int, where: str) -> Joint:
+    if not isinstance(item, Mapping):
+        raise GaitInputError(f"{where}: joint #{k} must be a JSON object")
+    name = item.get("name")
+    if not isinstance(name, str) or not name or "." in name:
+        raise GaitInputError(f"{where}: joint #{k} needs a non-empty 'name' without dots")
+    what = f"{where}: joint {name!r}"
+    parent = item.get("parent")
+    if parent is not None and not isinstance(parent, str):
+        raise GaitInputError(f"{what}: 'parent' must be a joint name or null")
+    offset = item.get("offset")
+    try:
+        offset_t = tuple(float(v) for v in offset)
+    except (TypeError, ValueError):
+        offset_t = ()
+    if len(offset_t) != 3 or not np.all(np.isfinite(offset_t)):
+        raise GaitInputError(f"{what}: 'offset' must be three finite numbers (metres)")
+    channels = item.get("channels", [])
+    if not isinstance(channels, list) or not all(isinstance(c, str) for c in channels):
+        raise GaitInputError(f"{what}: 'channels' must be a list of channel names")
+    raw_limits = item.get("limits") or {}
+    if not isinstance(raw_limits, Mapping):
+        raise GaitInputError(f"{what}: 'limits' must be an object like {{\"rz\": [-30, 30]}}")
+    limits: dict[str, tuple[float, float]] = {}
+    for ch, bounds in raw_limits.items():
+        try:
+            lo, hi = (float(v) for v in bounds)
+        except (TypeError, ValueError):
+            raise GaitInputError(f"{what}: limits of {ch!r} must be [lower, upper]") from None
+        limits[ch] = (lo, hi)
+    bone = item.get("bone")
+    radii = color = None
+    if bone is not None:
+        try:
+            radii = tuple(float(v) for v in bone["radii"])
+            color = tuple(float(v) for v in bone.get("color", (0.5, 0.5, 0.5)))
+        except (TypeError, ValueError, KeyError):
+            raise GaitInputError(
+                f"{what}: 'bone' must be {{'radii': [a, b], 'color': [r, g, b]}}") from None
+        if len(radii) != 2 or min(radii) <= 0 or len(color) != 3:
+            raise GaitInputError(f"{what}: bone radii must be two positive numbers, color three")
+    return Joint(name, parent, offset_t, tuple(channels), limits, str(item.get("side", "C")),
+                 item.get("mirror"), radii, color or (0.5, 0.5, 0.5))
+
+
+def _validate(joints: tuple[Joint, ...]) -> None:
+    index: dict[str, int] = {}
+    for i, j in enumerate(joints):
+        if j.name in index:
+            raise GaitInputError(f"duplicate joint name {j.name!r}; every joint needs its own")
+        index[j.name] = i
+    for j in joints:
+        if j.parent is not None and j.parent not in index:
+            raise GaitInputError(f"joint {j.name!r} has unknown parent {j.parent!r}")
+    for j in joints:  # walk up from every joint: a cycle never reaches a root
+        seen, cur = {j.name}, j
+        while cur.parent is not None:
+            if cur.parent in seen:
+                raise GaitInputError(f"joint hierarchy has a cycle through {cur.parent!r}")
+            seen.add(cur.parent)
+            cur = joints[index[cur.parent]]
+    roots = [j.name for j in joints if j.parent is None]
+    if roots != [joints[0].name]:
+        raise GaitInputError(f"the first joint must be the only root (parent null), got {roots}")
+    for i, j in enumerate(joints):
+        if j.parent is not None and index[j.parent] > i:
+            raise GaitInputError(
+                f"joint {j.name!r} is listed before its parent; list parents first")
+        _validate_channels(j)
+        if j.bone_radii is not None and (j.parent is None or not any(j.offset)):
+            raise GaitInputError(f"joint {j.name!r}: a bone needs a parent and a non-zero offset")
+    for j in joints:
+        if j.side not in ("L", "R", "C"):
+            raise GaitInputError(f"joint {j.name!r}: side must be 'L', 'R' or 'C', got {j.side!r}")
+        if j.side == "C":
+            if j.mirror not in (None, j.name):
+                raise GaitInputError(f"centre joint {j.name!r} cannot have mirror {j.mirror!r}")
+            continue
+        partner = joints[index[j.mirror]] if j.mirror in index else None
+        if partner is None or partner.mirror != j.name or partner.side == j.side or \
+                partner.side == "C" or partner.channels != j.channels:
+            raise GaitInputError(
+                f"joint {j.name!r} (side {j.side}) needs a mirror partner on the other side "
+                f"that names it back and has the same channels; got mirror {j.mirror!r}"
+            )
+
+
+def _validate_channels(j: Joint) -> None:
+    chans = j.channels
+    if any(c not in CHANNEL_ORDER for c in chans) or len(set(chans)) != len(chans):
+        raise GaitInputError(f"joint {j.name!r}: channels {list(chans)} must be distinct names "
+                             f"from {list(CHANNEL_ORDER)}")
+    if list(chans) != sorted(chans, key=CHANNEL_ORDER.index):
+        raise GaitInputError(f"joint {j.name!r}: channels must follow the order "
+                             f"{list(CHANNEL_ORDER)} (rotation order Z, X, Y)")
+    if j.parent is not None and any(c.startswith("t") for c in chans):
+        raise GaitInputError(f"joint {j.name!r}: only the root may have translation channels")
+    for ch, (lo, hi) in j.limits.items():
+        if ch not in chans or ch not in ROTATION_CHANNELS or not lo <= hi:
+            raise GaitInputError(f"joint {j.name!r}: limits for {ch!r} must name one of its "
+                                 f"rotation channels with lower <= upper")

@@ -1,0 +1,159 @@
+"""Plain data of a Gait Studio project: rectangles drawn on frames and sketch strokes.
+
+Values are frozen dataclasses of numbers and numpy arrays, never Qt types: an edit makes a
+new value, so undo only swaps the before and after values.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gaitcore.errors import GaitInputError
+
+
+@dataclass(frozen=True)
+class Rect:
+    """An axis-aligned rectangle in pixels: columns ``x .. x+w-1``, rows ``y .. y+h-1``.
+
+    Attributes
+    ----------
+    x, y : int
+        Top-left corner (column, row); may be negative before clipping.
+    w, h : int
+        Width and height, both positive.
+
+    Raises
+    ------
+    GaitInputError
+        When ``w`` or ``h`` is not positive.
+
+    Notes
+    -----
+    The artist draws such rectangles over the subject and the background on the first frame
+    to seed the colour models (paper Section 2.2).
+    """
+
+    x: int
+    y: int
+    w: int
+    h: int
+
+    def __post_init__(self) -> None:
+        for name in ("x", "y", "w", "h"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not float(value).is_integer():
+                raise GaitInputError(f"rectangle {name}={value!r} is not a whole number of pixels")
+            object.__setattr__(self, name, int(value))
+        if self.w <= 0 or self.h <= 0:
+            raise GaitInputError(
+                f"rectangle {self.as_tuple()} is empty: width and height must be positive"
+            )
+
+    @classmethod
+    def from_corners(cls, x0: float, y0: float, x1: float, y1: float) -> Rect:
+        """Rectangle spanning two opposite corners given in any order (as dragged)."""
+        ax, bx = sorted((int(round(x0)), int(round(x1))))
+        ay, by = sorted((int(round(y0)), int(round(y1))))
+        return cls(ax, ay, bx - ax, by - ay)
+
+    @classmethod
+    def parse(cls, text: str) -> Rect:
+        """Parse ``"x,y,w,h"`` (the command line's format)."""
+        parts = text.replace(" ", "").split(",")
+        try:
+            values = [int(p) for p in parts]
+        except ValueError:
+            values = []
+        if len(values) != 4:
+            raise GaitInputError(f"rectangle {text!r} is not four integers x,y,w,h")
+        return cls(*values)
+
+    def as_tuple(self) -> tuple[int, int, int, int]:
+        return self.x, self.y, self.w, self.h
+
+    @property
+    def area(self) -> int:
+        return self.w * self.h
+
+    def clipped_to(self, width: int, height: int) -> Rect:
+        """The part of this rectangle inside a ``width`` x ``height`` frame.
+
+        Raises
+        ------
+        GaitInputError
+            When the rectangle lies entirely outside the frame.
+        """
+        x0, y0 = max(self.x, 0), max(self.y, 0)
+        x1, y1 = min(self.x + self.w, int(width)), min(self.y + self.h, int(height))
+        if x1 <= x0 or y1 <= y0:
+            raise GaitInputError(
+                f"rectangle {self.as_tuple()} lies outside the {width}x{height} frame: "
+                "draw it over the image"
+            )
+        return Rect(x0, y0, x1 - x0, y1 - y0)
+
+    def slices(self) -> tuple[slice, slice]:
+        """``(rows, cols)`` slices selecting the rectangle in an image array."""
+        return slice(self.y, self.y + self.h), slice(self.x, self.x + self.w)
+
+
+@dataclass(frozen=True, eq=False)
+class Stroke:
+    """One sketched polyline, drawn white on black to stand for a part of the animal.
+
+    Attributes
+    ----------
+    points_xy : ndarray of shape (k, 2), float64
+        Vertices in full-frame pixel coordinates (x, y); read-only copy of the input.
+    width_px : float
+        Pen width in pixels (positive).
+    frame : int
+        Clip frame (0-based) the stroke belongs to.
+
+    Raises
+    ------
+    GaitInputError
+        For points that are not a non-empty finite (k, 2) array, a non-positive width or a
+        negative frame.
+
+    Notes
+    -----
+    Paper Section 2.2: where segmentation fails the artist sketches the spine, legs and head
+    with rough strokes; the rasterized strokes replace the binary silhouette.
+    """
+
+    points_xy: np.ndarray
+    width_px: float
+    frame: int
+
+    def __post_init__(self) -> None:
+        pts = np.array(self.points_xy, dtype=np.float64)
+        if pts.ndim != 2 or pts.shape[1] != 2 or pts.shape[0] == 0:
+            raise GaitInputError(
+                f"stroke points must be an array of shape (k, 2) with k >= 1, got {pts.shape}"
+            )
+        if not np.isfinite(pts).all():
+            raise GaitInputError("stroke points must be finite numbers")
+        width = float(self.width_px)
+        if not width > 0:
+            raise GaitInputError(f"stroke width must be positive, got {self.width_px}")
+        if int(self.frame) != self.frame or self.frame < 0:
+            raise GaitInputError(f"stroke frame must be a non-negative integer, got {self.frame}")
+        pts.flags.writeable = False
+        object.__setattr__(self, "points_xy", pts)
+        object.__setattr__(self, "width_px", width)
+        object.__setattr__(self, "frame", int(self.frame))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Stroke):
+            return NotImplemented
+        return (self.frame == other.frame and self.width_px == other.width_px
+                and np.array_equal(self.points_xy, other.points_xy))
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def moved(self, points_xy: np.ndarray, frame: int | None = None) -> Stroke:
+        """A copy with new points (and optionally another frame), same width."""
+        return Stroke(points_xy, self.width_px, self.frame if frame is None else frame)

@@ -1,0 +1,96 @@
+"""From an input path to tracked silhouettes: the first step of ``gaitcore analyze``.
+
+A folder of binary masks skips segmentation; colour footage (a video file or a folder of
+images) is segmented from rectangles drawn on its first frame (paper Section 2.2).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from gaitcore.errors import GaitInputError
+from gaitcore.footage.image_folder import iter_mask_folder, list_image_files
+from gaitcore.progress import Progress
+from gaitcore.silhouettes.annotations import Rect
+from gaitcore.silhouettes.tracking import RoiClip, crop_rois
+
+
+def is_mask_folder(path: Path) -> bool:
+    """True when ``path`` is a folder whose first image is binary (only 0 and 255 or 0 and 1).
+
+    Raises
+    ------
+    GaitInputError
+        For an empty folder, one with non-image files, or an unreadable first image.
+    """
+    if not path.is_dir():
+        return False
+    first = list_image_files(path)[0]
+    img = cv2.imread(str(first), cv2.IMREAD_UNCHANGED)
+    if img is None:
+        raise GaitInputError(f"cannot read image {first}: the file is damaged or not an image")
+    if img.ndim == 3:
+        if img.shape[2] == 4:
+            img = img[:, :, :3]
+        if not (np.array_equal(img[:, :, 0], img[:, :, 1]) and np.array_equal(img[:, :, 0], img[:, :, 2])):
+            return False
+        img = img[:, :, 0]
+    values = np.unique(img)
+    return values.size <= 2 and set(values.tolist()) <= {0, 1, 255}
+
+
+def load_silhouettes(
+    source: Path,
+    out_dir: Path,
+    *,
+    subject: Sequence[Rect] = (),
+    background: Sequence[Rect] = (),
+    max_side: int | None = 160,
+    progress: Progress | None = None,
+) -> RoiClip:
+    """Tracked, fixed-size silhouettes of the subject in every frame of ``source``.
+
+    Parameters
+    ----------
+    source : Path
+        Folder of binary masks, folder of colour images, or video file.
+    out_dir : Path
+        For colour footage, the computed masks are written to ``out_dir/masks/00000.png``...
+    subject, background : sequence of Rect
+        Rectangles on the first frame, required for colour footage.
+    max_side : int or None
+        Longer side of the ROI crops (they are shrunk to it), which bounds memory on long
+        clips; None keeps the source resolution.
+    progress : callable(done, total) -> bool, optional
+
+    Raises
+    ------
+    GaitInputError
+        Unreadable input, colour footage without rectangles, or no subject found.
+    """
+    source = Path(source)
+    if not source.exists():
+        raise GaitInputError(f"{source} does not exist: give a video file, an image folder or a mask folder")
+    if is_mask_folder(source):
+        return crop_rois(iter_mask_folder(source), max_side=max_side, progress=progress)
+    if not subject or not background:
+        raise GaitInputError(
+            f"{source} is colour footage: give at least one --subject and one --background "
+            "rectangle x,y,w,h drawn on its first frame (or pass a folder of binary masks)"
+        )
+    from gaitcore.footage.sources import open_frames
+    from gaitcore.silhouettes.segmentation import segment_clip
+
+    mask_dir = Path(out_dir) / "masks"
+    mask_dir.mkdir(parents=True, exist_ok=True)
+
+    def write_mask(index: int, mask: np.ndarray) -> None:
+        cv2.imwrite(str(mask_dir / f"{index:05d}.png"), mask)
+
+    with open_frames(source) as frames:
+        return segment_clip(frames, list(subject), list(background), progress=progress,
+                            mask_sink=write_mask, max_side=max_side)

@@ -1,0 +1,1 @@
+"""Data files shipped with gaitcore (installed as ``gaitcore.resources``): skeleton templates."""
