@@ -8,6 +8,7 @@ frame when they are undone or redone, so the artist sees what changed.
 from __future__ import annotations
 
 from dataclasses import replace
+from enum import IntEnum, unique
 
 from PySide6.QtGui import QUndoCommand
 
@@ -16,8 +17,14 @@ from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.project.document import AnimationOptions, FootageFit, Project, Silhouettes
 from gaitcore.silhouettes.annotations import Rect, Stroke
 
-_SETTINGS_ID = 1001
-_FOOTAGE_FIT_ID = 1002
+
+@unique
+class MergeId(IntEnum):
+    """Undo merge ids (``QUndoCommand.id``), one per kind of command that merges; unique."""
+
+    SETTINGS = 1001
+    FOOTAGE_FIT = 1002
+    POSE = 1003
 
 
 class ProjectCommand(QUndoCommand):
@@ -136,7 +143,7 @@ class _FieldCommand(ProjectCommand):
 class ChangeSettingsCommand(_FieldCommand):
     """Change the analysis settings (one field)."""
 
-    _ID = _SETTINGS_ID
+    _ID = MergeId.SETTINGS
 
     def __init__(self, state: AppState, settings: AnalysisSettings, field_name: str) -> None:
         super().__init__(state, replace(state.project, settings=settings), field_name,
@@ -146,7 +153,7 @@ class ChangeSettingsCommand(_FieldCommand):
 class FootageFitCommand(_FieldCommand):
     """Scale, shift or mirror the footage behind the skeleton (one field)."""
 
-    _ID = _FOOTAGE_FIT_ID
+    _ID = MergeId.FOOTAGE_FIT
 
     def __init__(self, state: AppState, fit: FootageFit, field_name: str) -> None:
         super().__init__(state, replace(state.project, footage_fit=fit), field_name,

@@ -15,9 +15,9 @@ import cv2
 import numpy as np
 from PySide6.QtCore import QStandardPaths
 
-from app.document import silhouettes_from_masks
 from gaitcore.progress import Progress
 from gaitcore.project.document import Project
+from gaitcore.project.steps import silhouettes_from_masks
 
 DEMO_GAIT = "canter"
 DEMO_FRAMES = 100
@@ -42,7 +42,7 @@ def ensure_demo_clip(folder: Path, progress: Progress | None = None) -> Path:
     ------
     GaitInputError
         When rendering fails (no OpenGL).
-    InterruptedError
+    Cancelled
         When ``progress`` returned False.
     """
     if (folder / _DONE).exists():

@@ -12,11 +12,9 @@ from dataclasses import replace
 import numpy as np
 from PySide6.QtGui import QUndoCommand
 
-from app.commands import ProjectCommand
+from app.commands import MergeId, ProjectCommand
 from app.state import AppState
 from gaitcore.rig.skeleton import Skeleton
-
-_POSE_ID = 1002
 
 
 class SetPoseCommand(ProjectCommand):
@@ -35,7 +33,7 @@ class SetPoseCommand(ProjectCommand):
         self._merge_key = merge_key
 
     def id(self) -> int:
-        return _POSE_ID if self._merge_key is not None else -1
+        return MergeId.POSE if self._merge_key is not None else -1
 
     def mergeWith(self, other: QUndoCommand) -> bool:
         if not isinstance(other, SetPoseCommand) or other._merge_key != self._merge_key:

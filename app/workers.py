@@ -19,7 +19,7 @@ from PySide6.QtWidgets import QProgressDialog, QWidget
 
 from gaitcore.errors import GaitInputError
 from gaitcore.footage.sources import FrameSource
-from gaitcore.progress import Progress
+from gaitcore.progress import Cancelled, Progress
 
 _PROGRESS_INTERVAL_S = 0.03
 
@@ -75,7 +75,7 @@ class Job(QObject):
         """Run ``fn`` in the calling thread (the pool calls this) and report by signals."""
         try:
             result = self._fn(self._progress)
-        except InterruptedError:
+        except Cancelled:
             self.cancelled.emit()
         except GaitInputError as exc:
             self.failed.emit(str(exc))

@@ -78,7 +78,7 @@ class ImagePCA:
         ------
         GaitInputError
             Fewer than 2 frames, non-finite values, or frames that are all identical.
-        InterruptedError
+        Cancelled
             If ``progress`` returned False.
 
         Notes

@@ -425,7 +425,7 @@ def select_key_images(
         If projections are not a finite, non-empty 2-D array, m < 1, there are fewer than m
         frames with distinct coordinates, pinned or forbidden frames are out of range or
         overlap, more than m are pinned, or too few allowed frames are left.
-    InterruptedError
+    Cancelled
         If ``progress`` returned False.
 
     Notes

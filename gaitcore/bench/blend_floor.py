@@ -102,7 +102,7 @@ def best_blend_floor(truth: np.ndarray, keys: int, *,
     keys : int
         Poses per set.
     progress : callable(done, total) -> bool, optional
-        Called after each chunk of sets; returning False cancels with InterruptedError.
+        Called after each chunk of sets; returning False cancels with Cancelled.
 
     Returns
     -------
@@ -112,7 +112,7 @@ def best_blend_floor(truth: np.ndarray, keys: int, *,
     ------
     GaitInputError
         ``keys`` outside 1 .. number of distinct poses, or more than MAX_SETS sets.
-    InterruptedError
+    Cancelled
         If ``progress`` returned False.
     """
     truth = _as_motion(truth)

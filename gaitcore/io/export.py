@@ -170,7 +170,7 @@ def write_preview_video(path: str | Path, footage_frames: Iterable[np.ndarray],
     ------
     GaitInputError
         Bad poses, size or frame rate, fewer footage frames than poses, or no usable codec.
-    InterruptedError
+    Cancelled
         ``progress`` returned False; the partial file is removed.
     """
     import cv2

@@ -230,7 +230,7 @@ def render_clip(skeleton: Skeleton, poses: np.ndarray, *, width: int = 320, heig
     ------
     GaitInputError
         Bad poses or rendering options.
-    InterruptedError
+    Cancelled
         ``progress`` returned False.
 
     Notes
@@ -255,14 +255,3 @@ def _look_rotation(forward: np.ndarray) -> np.ndarray:
     x = np.cross([0.0, 1.0, 0.0], z)
     x /= np.linalg.norm(x)
     return np.column_stack([x, np.cross(z, x), z])
-
-
-def _light_pose(towards_light: np.ndarray) -> np.ndarray:
-    """Pose of a directional light shining from ``towards_light`` onto the origin."""
-    pose = np.eye(4)
-    d = towards_light / np.linalg.norm(towards_light)
-    up = np.array([0.0, 1.0, 0.0]) if abs(d[1]) < 0.95 else np.array([1.0, 0.0, 0.0])
-    x = np.cross(up, d)
-    x /= np.linalg.norm(x)
-    pose[:3, :3] = np.column_stack([x, np.cross(d, x), d])
-    return pose

@@ -10,6 +10,7 @@ import pytest
 
 from app.workers import FrameLoader, Job, JobRunner
 from gaitcore.errors import GaitInputError
+from gaitcore.progress import Cancelled
 
 
 @pytest.fixture
@@ -39,7 +40,7 @@ def test_cancel_stops_a_job_at_its_next_progress_report(qtbot, runner):
         for i in range(1000):
             started.set()
             if progress(i, 1000) is False:
-                raise InterruptedError("stopped")
+                raise Cancelled("stopped")
             time.sleep(0.005)
         return "finished"
 

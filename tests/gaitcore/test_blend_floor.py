@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from gaitcore.bench.blend_floor import MAX_SETS, best_blend_floor, blend_floor
 from gaitcore.errors import GaitInputError
+from gaitcore.progress import Cancelled
 
 
 def test_hand_computed_floor():
@@ -89,5 +90,5 @@ def test_best_floor_rejects_bad_input():
         best_blend_floor(truth, 7)
     with pytest.raises(GaitInputError, match=f"more than {MAX_SETS}"):
         best_blend_floor(np.random.default_rng(0).normal(size=(200, 3)), 5)
-    with pytest.raises(InterruptedError, match="stopped"):
+    with pytest.raises(Cancelled, match="stopped"):
         best_blend_floor(truth, 2, progress=lambda done, total: False)

@@ -19,6 +19,7 @@ from gaitcore.io import export
 from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.export import EXPORTERS, export_animation, write_preview_video
 from gaitcore.io.pose_table import PoseTable, read_pose_table
+from gaitcore.progress import Cancelled
 from gaitcore.rig.skeleton import load_template
 from tests.gaitcore.walker import walker_clip, write_mask_folder
 
@@ -68,7 +69,7 @@ def test_animate_exports_bvh_and_glb(canter, tmp_path):
                  "--out", str(out), "--bvh", str(tmp_path / "a.bvh"),
                  "--glb", str(tmp_path / "a.glb"), "--skeleton", str(canter["skeleton"]),
                  "--fps", "30"]) == 0
-    # The contract of DESIGN.md: CURVES.csv has exactly the columns of KEYS.csv.
+    # The contract of the README: CURVES.csv has exactly the columns of KEYS.csv.
     header = out.read_text().splitlines()[0]
     assert header == canter["key_poses"].read_text().splitlines()[0]
     curves = read_pose_table(out)
@@ -252,7 +253,7 @@ def test_preview_video_falls_back_to_mjpg(tmp_path, monkeypatch):
 @pytest.mark.gl
 def test_preview_video_cancel_and_short_footage_leave_no_file(tmp_path):
     footage, poses = _preview_inputs(5)
-    with pytest.raises(InterruptedError, match="cancelled at frame 2"):
+    with pytest.raises(Cancelled, match="cancelled at frame 2"):
         write_preview_video(tmp_path / "p.mp4", footage, HORSE, poses, size=(64, 48),
                             progress=lambda d, t: d < 2)
     assert not (tmp_path / "p.mp4").exists()

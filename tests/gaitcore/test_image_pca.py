@@ -2,6 +2,7 @@ import numpy as np
 import pytest
 
 from gaitcore import GaitInputError, ImagePCA
+from gaitcore.progress import Cancelled
 
 
 def _moving_bar(n=40, size=(12, 16)):
@@ -133,6 +134,6 @@ def test_progress_returning_false_cancels(monkeypatch, limit):
         calls.append(done)
         return len(calls) < 5 if limit else False
 
-    with pytest.raises(InterruptedError, match="PCA cancelled"):
+    with pytest.raises(Cancelled, match="PCA cancelled"):
         ImagePCA.fit(_moving_bar(1100, (12, 16)), n_components=3, progress=stop_at_fifth)
     assert len(calls) == (5 if limit else 1)

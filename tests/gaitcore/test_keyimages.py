@@ -11,6 +11,7 @@ import pytest
 
 from gaitcore.analysis.keyimages import KeySelection, condition_curve, select_key_images
 from gaitcore.errors import GaitInputError
+from gaitcore.progress import Cancelled
 
 ALPHA = log(2.0)
 
@@ -197,7 +198,7 @@ def test_progress_is_monotone_and_ends_complete():
 
 
 def test_progress_returning_false_cancels():
-    with pytest.raises(InterruptedError):
+    with pytest.raises(Cancelled):
         select_key_images(_loop(), 5, progress=lambda done, total: False)
 
 

@@ -7,6 +7,7 @@ import pytest
 
 import gaitcore.analysis.image_pca as image_pca
 from gaitcore.analysis.analyze import AnalysisSettings, analyze_silhouettes
+from gaitcore.progress import Cancelled
 from gaitcore.silhouettes.tracking import crop_rois
 from tests.gaitcore.walker import walker_clip
 
@@ -45,6 +46,6 @@ def test_cancel_during_the_pca(roi, streamed):
         calls.append(done)
         return len(calls) < 3
 
-    with pytest.raises(InterruptedError, match="PCA"):
+    with pytest.raises(Cancelled, match="PCA"):
         analyze_silhouettes(roi, AnalysisSettings(), progress=cancel_after_three)
     assert len(calls) == 3 and max(calls) < 1000

@@ -11,6 +11,7 @@ import pytest
 from gaitcore.errors import GaitInputError
 from gaitcore.footage.image_folder import read_mask_folder
 from gaitcore.footage.sources import open_frames
+from gaitcore.progress import Cancelled
 from gaitcore.silhouettes.annotations import Rect
 from gaitcore.silhouettes.segmentation import (
     ColourModel,
@@ -89,7 +90,7 @@ def test_video_source_is_streamed(tmp_path):
     with open_frames(path) as source:
         with pytest.raises(GaitInputError, match="outside"):
             segment_clip(source, [Rect(900, 900, 5, 5)], BACKGROUND)
-        with pytest.raises(InterruptedError):
+        with pytest.raises(Cancelled):
             segment_clip(source, SUBJECT, BACKGROUND, progress=lambda done, total: done < 3)
     assert not [t for t in threading.enumerate() if t.name == "gaitcore-decode"]
 
@@ -140,7 +141,7 @@ def test_bad_frames_and_settings():
 
 def test_cancel():
     frames, _ = scene(6)
-    with pytest.raises(InterruptedError):
+    with pytest.raises(Cancelled):
         segment_clip(frames, SUBJECT, BACKGROUND, progress=lambda done, total: done < 2)
 
 

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from gaitcore.errors import GaitInputError
+from gaitcore.progress import Cancelled
 from gaitcore.silhouettes.tracking import (
     RoiAccumulator,
     SubjectTracker,
@@ -94,7 +95,7 @@ def test_tracker_hint_and_origin():
 
 
 def test_progress_can_cancel():
-    with pytest.raises(InterruptedError):
+    with pytest.raises(Cancelled):
         crop_rois(moving_disc(), progress=lambda done, total: done < 3)
 
 

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from gaitcore.errors import GaitInputError
+from gaitcore.progress import Cancelled
 from gaitcore.silhouettes.annotations import Stroke
 from gaitcore.silhouettes.sketch import (
     carry_strokes,
@@ -50,7 +51,7 @@ def test_sketches_enter_the_roi_pipeline_and_empty_frames_are_lost():
     with_head = crop_sketches(strokes + [head], 4, (64, 96), max_side=None)
     assert with_head.crops[0].sum() > roi.crops[0].sum()
     assert with_head.centers_xy[0, 0] > roi.centers_xy[0, 0]
-    with pytest.raises(InterruptedError):
+    with pytest.raises(Cancelled):
         crop_sketches(strokes, 4, (64, 96), progress=lambda done, total: done < 2)
     masks = list(sketch_masks(strokes, 4, (64, 96)))
     assert len(masks) == 4 and not masks[2].any() and masks[3].any()

@@ -13,6 +13,7 @@ import pytest
 from gaitcore.bench import GAITS, generate_gait
 from gaitcore.bench.synth_command import add_parser
 from gaitcore.errors import GaitInputError
+from gaitcore.progress import Cancelled
 from gaitcore.rig.skeleton import Skeleton, load_template
 
 pytestmark = pytest.mark.gl
@@ -82,7 +83,7 @@ def test_progress_can_cancel(horse):
         seen.append((done, total))
         return done < 2
 
-    with pytest.raises(InterruptedError):
+    with pytest.raises(Cancelled):
         render_clip(horse, np.zeros((5, horse.n_channels)), width=64, height=48,
                     progress=progress)
     assert seen[-1] == (2, 5)
