@@ -26,6 +26,8 @@ demo: $(STAMP) system-deps
 
 test: $(STAMP) system-deps
 	$(BIN)/lint-imports
+	$(BIN)/ruff check .
+	$(BIN)/mypy
 	sh scripts/run-tests.sh $(BIN)
 
 benchmark: $(STAMP) system-deps

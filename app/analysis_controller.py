@@ -1,6 +1,6 @@
 """Keep the analysis in step with the project, off the GUI thread, latest request wins.
 
-Every gaitcore call of the analysis step is here. A change of the silhouettes (or of the
+The computations are :mod:`gaitcore.project.steps`' ``analyze`` and ``rekey``. A change of the silhouettes (or of the
 working size) reruns the whole analysis (PCA, diagnosis, keys); a change of the number of
 PCs or keys, of pinned or dropped keys or of switching only reruns the key search on the
 projections already computed. Requests are coalesced for 80 ms (spin boxes) and a newer one
@@ -9,48 +9,15 @@ cancels the running one; a long one (a long clip's PCA) shows its progress with 
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 from PySide6.QtCore import QObject, QTimer
 
 from app.state import AppState
-from app.workers import Job, JobRunner, Progress, ProgressDialog
-from gaitcore.analysis.alternates import propose_alternates
-from gaitcore.analysis.analyze import Analysis, AnalysisSettings, analyze_silhouettes
-from gaitcore.analysis.keyimages import select_key_images
-from gaitcore.errors import GaitInputError
+from app.workers import Job, JobRunner, ProgressDialog
+from gaitcore.analysis.analyze import Analysis, AnalysisSettings
 from gaitcore.project.document import Project, Silhouettes
+from gaitcore.project.steps import analyze, rekey
 
 _COALESCE_MS = 80
-
-
-def analyze(silhouettes: Silhouettes, settings: AnalysisSettings, progress: Progress) -> Analysis:
-    """The whole analysis step of the paper (Sections 2.3, 3.1, 3.2, 5.2) on silhouettes."""
-    return analyze_silhouettes(silhouettes.roi, settings, sketched=silhouettes.origin == "sketched",
-                               progress=progress)
-
-
-def reselect(analysis: Analysis, settings: AnalysisSettings, progress: Progress) -> Analysis:
-    """``analysis`` with the key-images (and alternates) chosen again under ``settings``.
-
-    Raises
-    ------
-    GaitInputError
-        More PCs than the analysis has, or a key search that cannot be satisfied.
-    """
-    available = analysis.projections.shape[1]
-    if settings.pcs > available:
-        raise GaitInputError(f"the clip has only {available} components: use at most {available} PCs")
-    coords = analysis.projections[:, : settings.pcs]
-    selection = select_key_images(
-        coords, settings.keys, alpha=settings.alpha, pinned=settings.pinned,
-        forbidden=tuple(sorted(set(settings.forbidden) | set(analysis.lost_frames))),
-        progress=progress, time_limit_s=settings.key_time_limit_s,
-    )
-    alternates = None
-    if settings.switching:
-        alternates = propose_alternates(coords, selection.frames, theta=analysis.loop_angle)
-    return replace(analysis, settings=settings, selection=selection, alternate_frames=alternates)
 
 
 class AnalysisController(QObject):
@@ -99,7 +66,7 @@ class AnalysisController(QObject):
         current = self._state.analysis
         if current is not None and self._analysed is silhouettes and (
                 current.settings.max_side_px == settings.max_side_px):
-            job = Job(lambda progress: reselect(current, settings, progress), "Choosing key-images",
+            job = Job(lambda progress: rekey(current, settings, progress=progress), "Choosing key-images",
                       unit=None)
         else:
             job = Job(lambda progress: analyze(silhouettes, settings, progress),

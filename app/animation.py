@@ -1,103 +1,23 @@
 """The animation preview: curves from the posed keys, kept in step with the project.
 
-:func:`compute_animation` is the one place the GUI animates, with the very numbers
-``gaitcore animate`` reads from ``analysis.json`` (:func:`gaitcore.io.analysis_file.analysis_record`),
-so an export from the window and the command line agree exactly. :class:`AnimationController`
-recomputes it whenever the poses, the keys or the options change (coalesced: a spin box held
-down recomputes at most every 40 ms); it is milliseconds even for long clips, so it runs on
-the GUI thread.
+The curves come from :func:`gaitcore.project.steps.animate_project`, the function behind
+``gaitcore animate`` too, so an export from the window and the command line agree exactly.
+:class:`AnimationController` recomputes it whenever the poses, the keys or the options change
+(coalesced: a spin box held down recomputes at most every 40 ms); it is milliseconds even for
+long clips, so it runs on the GUI thread.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-import numpy as np
 from PySide6.QtCore import QObject, QTimer, Signal
 
 from app.commands import AnimationOptionsCommand
-from app.posing import alternates_in_use, missing_poses
 from app.state import AppState
-from gaitcore.analysis.analyze import Analysis
-from gaitcore.animation.animate import animate
-from gaitcore.animation.weights import InterpolationWeights, interpolation_weights, loop_cycle
 from gaitcore.errors import GaitInputError
-from gaitcore.io.analysis_file import analysis_record
-from gaitcore.project.document import AnimationOptions, Project
-from gaitcore.rig.skeleton import Skeleton
+from gaitcore.project.document import AnimationOptions
+from gaitcore.project.steps import Animation, animate_project
 
-CLAMP_RANGE = (0.0, 1.0)
 _COALESCE_MS = 40
-
-
-@dataclass(frozen=True, eq=False)
-class Animation:
-    """Curves of every frame and what produced them.
-
-    Attributes
-    ----------
-    curves : ndarray of shape (n, k)
-        A pose per clip frame, laid out as ``skeleton.channel_names``.
-    weights : InterpolationWeights
-    options : AnimationOptions
-    skeleton : Skeleton
-    cycle_start : int
-        First clip frame of the loop cycle (0 without ``options.loop``).
-    cycle : ndarray of shape (P, k) or None
-        The loop cycle when ``options.loop``.
-    """
-
-    curves: np.ndarray
-    weights: InterpolationWeights
-    options: AnimationOptions
-    skeleton: Skeleton
-    cycle_start: int = 0
-    cycle: np.ndarray | None = None
-
-    def pose_at(self, frame: int) -> np.ndarray:
-        """The pose shown at clip frame ``frame`` (the loop repeats in step with the clip)."""
-        if self.cycle is not None:
-            return self.cycle[(frame - self.cycle_start) % len(self.cycle)]
-        return self.curves[min(max(frame, 0), len(self.curves) - 1)]
-
-    def exported(self) -> tuple[np.ndarray, np.ndarray]:
-        """Frame numbers and poses to export: every clip frame, or the cycle from 0."""
-        if self.cycle is not None:
-            return np.arange(len(self.cycle)), self.cycle
-        return np.arange(len(self.curves)), self.curves
-
-
-def missing_message(missing: tuple[int, ...]) -> str:
-    return f"pose every key first (missing: frames {', '.join(map(str, missing))})"
-
-
-def compute_animation(project: Project, analysis: Analysis | None, skeleton: Skeleton,
-                      options: AnimationOptions = AnimationOptions()) -> Animation:
-    """Animate the clip from the posed keys (and alternates), as ``gaitcore animate`` does.
-
-    Raises
-    ------
-    GaitInputError
-        No analysis, keys without a pose (the message lists them), or a failed interpolation.
-    """
-    if analysis is None:
-        raise GaitInputError("no key-images yet: analyse the clip first")
-    missing = missing_poses(project, analysis, skeleton.n_channels)
-    if missing:
-        raise GaitInputError(missing_message(missing))
-    record = analysis_record(analysis)
-    alternates = alternates_in_use(project, analysis) or None
-    posed = tuple(record.key_frames) + tuple(alternates or ())
-    poses = {f: np.asarray(project.key_poses[f], dtype=float) for f in posed}
-    coords = record.filtered_projections if options.filtered else record.projections
-    clamp = CLAMP_RANGE if options.clamp else None
-    kwargs = dict(alternate_frames=alternates, theta=record.loop_angle, alpha=record.alpha, clamp=clamp)
-    curves = animate(coords, record.key_frames, poses, **kwargs)
-    weights = interpolation_weights(coords, record.key_frames, **kwargs)
-    start, cycle = 0, None
-    if options.loop:
-        start, cycle = loop_cycle(curves, analysis.diagnosis.period_frames)
-    return Animation(curves, weights, options, skeleton, start, cycle)
 
 
 class AnimationController(QObject):
@@ -155,7 +75,7 @@ class AnimationController(QObject):
         self._timer.stop()
         state = self._state
         try:
-            animation = compute_animation(state.project, state.analysis, state.skeleton,
+            animation = animate_project(state.project, state.analysis, state.skeleton,
                                           self.options)
         except GaitInputError as exc:
             animation, status = None, str(exc)

@@ -17,29 +17,12 @@ from app.dialogs import Asker
 from app.state import AppState
 from app.workers import Job, JobRunner, ProgressDialog
 from gaitcore.errors import GaitInputError
-from gaitcore.footage.image_folder import read_mask_folder
-from gaitcore.footage.sources import FrameSource, open_frames
 from gaitcore.project.document import Project, Silhouettes
+from gaitcore.project.steps import open_source, silhouettes_from_masks
 from gaitcore.project.storage import SUFFIX, load_project, missing_footage, save_project
 from gaitcore.silhouettes.extract import is_mask_folder
-from gaitcore.silhouettes.tracking import crop_rois
 
 MAX_RECENT = 8
-ROI_MAX_SIDE = 160  # as gaitcore.silhouettes.segmentation.segment_clip
-
-
-def silhouettes_from_masks(folder: Path, progress) -> Silhouettes:
-    """Tracked silhouettes of a folder of binary masks (segmentation is skipped)."""
-    return Silhouettes(crop_rois(read_mask_folder(folder), max_side=ROI_MAX_SIDE,
-                                 progress=progress), "masks")
-
-
-def open_source(project: Project) -> FrameSource | None:
-    """The footage of ``project`` (None when it has none)."""
-    if project.footage is None:
-        return None
-    return open_frames(project.footage, start=project.frame_start, stop=project.frame_stop,
-                       fps=project.fps)
 
 
 class DocumentController(QObject):
@@ -156,8 +139,25 @@ class DocumentController(QObject):
         return answer == "discard" or (answer == "save" and self.save())
 
     # -- jobs and recent files --------------------------------------------------------------
-    def run(self, job: Job, on_success) -> Job:
-        """Run ``job`` with a progress dialog; errors are shown, success calls ``on_success``."""
+    def run(self, job: Job, on_success, *, tied: bool = True) -> Job:
+        """Run ``job`` with a progress dialog; errors are shown, success calls ``on_success``.
+
+        A ``tied`` job belongs to the project open when it starts: opening another project
+        cancels it, and a result that arrives after that is dropped, never attached to the
+        new project. An export (its files are written by the job itself) is not tied.
+        """
+        if tied:
+            opened = self._state.opened_count
+
+            def land(result, on_success=on_success) -> None:
+                if self._state.opened_count == opened:
+                    on_success(result)
+                else:
+                    self.messageRaised.emit(f"{job.title}: dropped, its project was closed")
+
+            self._state.projectOpened.connect(job.cancel)
+            job.finished.connect(lambda: self._state.projectOpened.disconnect(job.cancel))
+            on_success = land
         job.succeeded.connect(on_success)
         job.failed.connect(lambda message: self.asker.error(job.title, message))
         job.cancelled.connect(lambda: self.messageRaised.emit(f"{job.title}: cancelled"))

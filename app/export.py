@@ -1,6 +1,6 @@
 """The Export menu: curves CSV, BVH, glTF and a preview video, through gaitcore.io.export.
 
-The animation is computed afresh from the project (:func:`app.animation.compute_animation`,
+The animation is computed afresh from the project (:func:`gaitcore.project.steps.animate_project`,
 with the preview's options), so what is written is exactly what ``gaitcore animate`` writes
 for the same analysis and key poses. Exporting before every key is posed says which frames
 are missing and writes nothing. Files are written off the GUI thread with progress + Cancel.
@@ -13,23 +13,22 @@ from pathlib import Path
 import numpy as np
 from PySide6.QtCore import QObject
 
-from app.animation import AnimationController, compute_animation
-from app.document import DocumentController, open_source
+from app.animation import AnimationController
+from app.document import DocumentController
 from app.state import AppState
 from app.workers import Job
 from gaitcore.errors import GaitInputError
 from gaitcore.io.export import EXPORTERS, export_animation, write_preview_video
 from gaitcore.io.pose_table import PoseTable
+from gaitcore.project.steps import animate_project, frame_rate, open_source
 
-DEFAULT_FPS = 24.0
 VIDEO = ".mp4"
 KINDS = {".csv": "Curves CSV", ".bvh": "BVH", ".glb": "glTF (.glb)", VIDEO: "Preview video"}
 
 
 def export_fps(state: AppState) -> float:
-    """Frame rate of the clip: the footage's, the project's, else 24."""
-    source = state.source
-    return float((source.fps if source is not None else None) or state.project.fps or DEFAULT_FPS)
+    """Frame rate of the clip (:func:`gaitcore.project.steps.frame_rate`)."""
+    return frame_rate(state.project, state.source)
 
 
 class ExportController(QObject):
@@ -50,7 +49,7 @@ class ExportController(QObject):
         state, asker = self._state, self._documents.asker
         title = f"Export {KINDS[suffix]}"
         try:
-            animation = compute_animation(state.project, state.analysis, state.skeleton,
+            animation = animate_project(state.project, state.analysis, state.skeleton,
                                           self._animation.options)
         except GaitInputError as exc:
             asker.error(title, f"{exc}; nothing was exported")
@@ -71,7 +70,7 @@ class ExportController(QObject):
         else:
             table = PoseTable(frames, skeleton.channel_names, curves)
             job = Job(lambda progress: export_animation(path, skeleton, table, fps), title)
-        return self._documents.run(job, lambda result: self._done(path, result))
+        return self._documents.run(job, lambda result: self._done(path, result), tied=False)
 
     def _footage_frames(self, animation):
         """An iterator over the frames the exported poses go with, read on the job's thread."""

@@ -5,8 +5,7 @@ from __future__ import annotations
 from PySide6.QtCore import QObject, QTimer
 
 from app.state import AppState
-
-DEFAULT_FPS = 25.0
+from gaitcore.project.steps import frame_rate
 
 
 class Player(QObject):
@@ -28,8 +27,7 @@ class Player(QObject):
         if self.playing:
             self.stop()
         elif self._state.n_frames > 1:
-            source = self._state.source
-            fps = (source.fps if source is not None else None) or self._state.project.fps or DEFAULT_FPS
+            fps = frame_rate(self._state.project, self._state.source)
             self._timer.start(max(1, round(1000 / fps)))
 
     def stop(self, *_changed) -> None:

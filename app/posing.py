@@ -19,73 +19,12 @@ from PySide6.QtCore import QObject, Signal
 from app.dialogs import Asker
 from app.pose_commands import SetPoseCommand, SetSkeletonCommand
 from app.state import AppState
-from gaitcore.analysis.analyze import Analysis
 from gaitcore.errors import GaitInputError
 from gaitcore.io.bvh.reader import read_bvh
-from gaitcore.io.pose_table import PoseTable, read_pose_table
-from gaitcore.project.document import Project
-from gaitcore.rig.rotations import euler_zxy_matrix, zxy_from_matrix
+from gaitcore.io.pose_table import PoseTable, joints_of, map_channels, read_pose_table
+from gaitcore.project.steps import alternates_in_use, frames_to_pose, missing_poses, read_rig
+from gaitcore.rig.posing import turn_joint
 from gaitcore.rig.skeleton import Skeleton
-
-IGNORED_COLUMNS = ("time_s",)
-MAX_LISTED = 10
-CENTIMETRE_RIG_M = 10.0
-"""A BVH rig taller than this (in file units read as metres) is taken to be in centimetres."""
-
-
-def alternates_in_use(project: Project, analysis: Analysis | None) -> tuple[int, ...]:
-    """The accepted alternates when switching is on and they still pair with the keys."""
-    if analysis is None or not project.settings.switching:
-        return ()
-    keys, alts = analysis.key_frames, project.alternates
-    if len(alts) != len(keys) or set(alts) & set(keys):
-        return ()
-    return tuple(alts)
-
-
-def frames_to_pose(project: Project, analysis: Analysis | None) -> tuple[int, ...]:
-    """Key-images, then the alternates in use: every frame that needs a pose."""
-    if analysis is None:
-        return ()
-    return tuple(analysis.key_frames) + alternates_in_use(project, analysis)
-
-
-def missing_poses(project: Project, analysis: Analysis | None, n_channels: int) -> tuple[int, ...]:
-    """Frames to pose that have no pose (or one of another rig's length)."""
-    return tuple(f for f in frames_to_pose(project, analysis)
-                 if len(project.key_poses.get(f, ())) != n_channels)
-
-
-def _joints_of(channels: list[str]) -> str:
-    joints = list(dict.fromkeys(c.rsplit(".", 1)[0] for c in channels))
-    more = f" and {len(joints) - MAX_LISTED} more" if len(joints) > MAX_LISTED else ""
-    return ", ".join(joints[:MAX_LISTED]) + more
-
-
-def map_channels(columns: tuple[str, ...], values: np.ndarray, skeleton: Skeleton
-                 ) -> tuple[np.ndarray, list[str]]:
-    """A pose of ``skeleton`` from one row of named values, matched by channel name.
-
-    Returns
-    -------
-    pose : ndarray of shape (k,)
-    ignored : list of str
-        Columns that are not channels of the skeleton.
-
-    Raises
-    ------
-    GaitInputError
-        Channels of the skeleton without a column; the message names their joints.
-    """
-    index = {c: i for i, c in enumerate(columns)}
-    missing = [c for c in skeleton.channel_names if c not in index]
-    if missing:
-        raise GaitInputError(
-            f"it lacks {len(missing)} of the {skeleton.n_channels} channels of the rig "
-            f"{skeleton.name!r}, on joints {_joints_of(missing)}; nothing was changed")
-    pose = np.array([values[index[c]] for c in skeleton.channel_names], dtype=float)
-    ignored = [c for c in columns if c not in skeleton.channel_names and c not in IGNORED_COLUMNS]
-    return pose, ignored
 
 
 class PosingController(QObject):
@@ -158,26 +97,9 @@ class PosingController(QObject):
         """
         frame = self._require_frame()
         skeleton = self._state.skeleton
-        chans = [f"{skeleton.joints[joint].name}.{c}" for c in ("rz", "rx", "ry")]
-        have = [c for c in chans if c in skeleton.channel_names]
-        if frame is None or not have:
+        pose = turn_joint(skeleton, base_pose, joint, axis, angle_deg)
+        if frame is None or pose is None:
             return
-        world = skeleton.forward_kinematics(base_pose)
-        parent = skeleton.parents[joint]
-        parent_rot = np.eye(3) if parent < 0 else world[parent, :3, :3]
-        a = np.asarray(axis, float) / np.linalg.norm(axis)
-        t = np.radians(angle_deg)
-        k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-        turn = np.eye(3) + np.sin(t) * k + (1 - np.cos(t)) * k @ k
-        old = [base_pose[skeleton.channel_index(c)] if c in have else 0.0 for c in chans]
-        local = euler_zxy_matrix(np.array(old))
-        new = zxy_from_matrix(parent_rot.T @ turn @ parent_rot @ local)
-        pose = np.array(base_pose, dtype=float)
-        limits = skeleton.limits_array()
-        for c, v in zip(chans, new):
-            if c in have:
-                i = skeleton.channel_index(c)
-                pose[i] = float(np.clip(v, *limits[i]))
         name = skeleton.joints[joint].name
         self._push(frame, pose, f"rotate {name} on frame {frame}", ("drag", frame, name, self._drag_id))
 
@@ -295,14 +217,12 @@ class PosingController(QObject):
         if path is None:
             return False
         try:
-            skeleton, _, _ = read_bvh(path)
-            rest = skeleton.joint_positions(skeleton.rest_pose())
-            if np.ptp(rest[:, 1]) > CENTIMETRE_RIG_M:
-                skeleton, _, _ = read_bvh(path, scale=0.01)
-                self.messageRaised.emit(f"{Path(path).name}: read in centimetres")
+            skeleton, note = read_rig(path)
         except GaitInputError as exc:
             self.asker.error("Cannot load the rig", str(exc))
             return False
+        if note:
+            self.messageRaised.emit(note)
         return self._replace_skeleton(skeleton, f"load rig {skeleton.name}")
 
     def use_template(self) -> bool:
@@ -340,7 +260,7 @@ class PosingController(QObject):
             return False
         if ignored:
             self.messageRaised.emit(f"imported; ignored {len(ignored)} channel(s) the rig does not "
-                                    f"have, on {_joints_of(ignored)}")
+                                    f"have, on {joints_of(ignored)}")
         return True
 
     def _require_frame(self) -> int | None:

@@ -72,6 +72,7 @@ class AppState(QObject):
         self._analysis: Analysis | None = None
         self._selected_key = -1
         self._selected_joint = ""
+        self._opened = 0
         self.undo_stack = QUndoStack(self)
 
     # -- read ---------------------------------------------------------------------------
@@ -110,6 +111,12 @@ class AppState(QObject):
         return self._project.skeleton or default_skeleton()
 
     @property
+    def opened_count(self) -> int:
+        """How many projects were opened so far: a job compares it to know whether the
+        project it started on is still the open one."""
+        return self._opened
+
+    @property
     def n_frames(self) -> int:
         """Frames of the clip: from the footage, else from the silhouettes, else 0."""
         if self._source is not None:
@@ -125,6 +132,7 @@ class AppState(QObject):
         self._source = source
         self._path = path
         self._project = project
+        self._opened += 1
         self._analysis = None
         self.undo_stack.clear()
         self.sourceChanged.emit(source)

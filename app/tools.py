@@ -1,8 +1,8 @@
 """Segmentation and sketch tools: the toolbar, and the gaitcore calls behind it.
 
-Every call into :mod:`gaitcore.silhouettes.segmentation` and :mod:`gaitcore.silhouettes.sketch` is in the four
-functions at the top, so an API change there is one edit here. Long work runs as a job with
-a progress dialog and Cancel; results land as undoable commands.
+Segmenting and rasterizing sketches are :mod:`gaitcore.project.steps`; moving strokes from
+frame to frame is in the two functions at the top. Long work runs as a job with a progress
+dialog and Cancel; results land as undoable commands.
 """
 
 from __future__ import annotations
@@ -16,27 +16,15 @@ from app.document import DocumentController
 from app.state import AppState
 from app.widgets.frame_canvas import Tool
 from app.widgets.frame_view import FrameView
-from app.workers import Job, Progress
+from app.workers import Job
 from gaitcore.footage.sources import FrameSource
-from gaitcore.project.document import Project, Silhouettes
+from gaitcore.project.document import Project
+from gaitcore.project.steps import segment, sketched_silhouettes
 from gaitcore.silhouettes.annotations import Stroke
-from gaitcore.silhouettes.segmentation import segment_clip
-from gaitcore.silhouettes.sketch import carry_strokes, crop_sketches, propagate_strokes
+from gaitcore.silhouettes.sketch import carry_strokes, propagate_strokes
 
 TOOL_KEYS = {Tool.NAVIGATE: "N", Tool.SUBJECT: "S", Tool.BACKGROUND: "B", Tool.DRAW: "D",
              Tool.ERASE: "E"}
-
-
-def segment(source: FrameSource, project: Project, progress: Progress) -> Silhouettes:
-    """Segment the whole clip from the project's rectangles (paper Section 2.2)."""
-    roi = segment_clip(source, project.subject_rects, project.background_rects, progress=progress)
-    return Silhouettes(roi, "segmented")
-
-
-def sketched_silhouettes(project: Project, n_frames: int, shape_rc: tuple[int, int],
-                         progress: Progress) -> Silhouettes:
-    """Silhouettes made of the sketch strokes; frames without strokes count as lost."""
-    return Silhouettes(crop_sketches(project.strokes, n_frames, shape_rc, progress=progress), "sketched")
 
 
 def copied_strokes(project: Project, frame: int) -> list[Stroke]:

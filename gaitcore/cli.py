@@ -13,6 +13,7 @@ from pathlib import Path
 
 from gaitcore.bench import synth_command
 from gaitcore.errors import GaitInputError
+from gaitcore.progress import Cancelled
 
 
 class _Parser(argparse.ArgumentParser):
@@ -80,9 +81,11 @@ def _add_analyze(sub) -> None:
 
 
 def _run_analyze(args: argparse.Namespace) -> int:
-    from gaitcore.analysis.analyze import AnalysisSettings, analyze_silhouettes
+    from gaitcore.analysis.analyze import AnalysisSettings
     from gaitcore.io.analysis_file import analysis_to_dict, write_analysis_json
-    from gaitcore.silhouettes.extract import load_silhouettes
+    from gaitcore.project.document import Silhouettes
+    from gaitcore.project.steps import analyze
+    from gaitcore.silhouettes.extract import is_mask_folder, load_silhouettes
 
     settings = AnalysisSettings(
         pcs=args.pcs,
@@ -95,7 +98,8 @@ def _run_analyze(args: argparse.Namespace) -> int:
     )
     roi = load_silhouettes(args.input, args.out, subject=args.subject, background=args.background,
                            max_side=settings.max_side_px)
-    analysis = analyze_silhouettes(roi, settings)
+    analysis = analyze(Silhouettes(roi, "masks" if is_mask_folder(args.input) else "segmented"),
+                       settings)
     write_analysis_json(args.out / "analysis.json", analysis, source=str(args.input))
     if args.json:
         print(json.dumps(analysis_to_dict(analysis, source=str(args.input)), indent=1))
@@ -146,7 +150,7 @@ def _add_animate(sub) -> None:
 def _run_animate(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from gaitcore.animation.animate import animate
+    from gaitcore.animation.animate import animate_record
     from gaitcore.io.analysis_file import read_analysis_json
     from gaitcore.io.export import EXPORTERS
     from gaitcore.io.pose_table import PoseTable, pose_matrix, read_pose_table, write_pose_table
@@ -160,38 +164,21 @@ def _run_animate(args: argparse.Namespace) -> int:
         raise GaitInputError(f"--fps must be a positive number of frames per second, got {args.fps}")
     skeleton = None
     if args.skeleton is not None:
-        from gaitcore.io.bvh.reader import read_bvh
-        from gaitcore.rig.skeleton import Skeleton
+        from gaitcore.project.steps import read_rig
 
-        if args.skeleton.suffix.lower() == ".bvh":
-            skeleton = read_bvh(args.skeleton)[0]
-        else:
-            skeleton = Skeleton.from_json(args.skeleton)
+        skeleton, note = read_rig(args.skeleton)
+        if note:
+            print(note)
     record = read_analysis_json(args.analysis)
     table = read_pose_table(args.key_poses)
     if exports:
         pose_matrix(skeleton, table)  # every channel of the skeleton posed, before any work
-    poses = table.as_dict()
     alternates = None if args.no_switching else record.alternate_frames
-    posed = set(record.key_frames) | set(alternates or ())
-    extra = sorted(set(poses) - posed)
-    if extra:
-        raise GaitInputError(
-            f"{args.key_poses}: frame(s) {extra} are not key-images of this analysis "
-            f"(keys {list(record.key_frames)}"
-            + (f", alternates {list(alternates)}" if alternates else "")
-            + ")"
-        )
-    coords = record.filtered_projections if args.filtered else record.projections
-    curves = animate(
-        coords,
-        record.key_frames,
-        poses,
-        alternate_frames=alternates,
-        theta=record.loop_angle,
-        alpha=record.alpha,
-        clamp=args.clamp,
-    )
+    try:
+        curves = animate_record(record, table.as_dict(), alternates=alternates,
+                                filtered=args.filtered, clamp=args.clamp)
+    except GaitInputError as exc:
+        raise GaitInputError(f"{args.key_poses}: {exc}") from None
     out_table = PoseTable(np.arange(record.n_frames), table.columns, curves)
     write_pose_table(args.out, out_table, fps=args.fps if args.csv_time else None)
     print(f"wrote {args.out} ({record.n_frames} frames, {len(table.columns)} channels)")
@@ -289,7 +276,7 @@ def main(argv: list[str] | None = None) -> int:
     except GaitInputError as exc:
         print(f"gaitcore: error: {exc}", file=sys.stderr)
         return 2
-    except InterruptedError as exc:
+    except Cancelled as exc:
         print(f"gaitcore: {exc}", file=sys.stderr)
         return 130
     except KeyboardInterrupt:

@@ -42,8 +42,8 @@ def save_project(clip: str, keys_path: str, out_path: str) -> None:
     the app opens with the animation ready."""
     from pathlib import Path
 
-    from app.document import silhouettes_from_masks
     from gaitcore.project.document import Project
+    from gaitcore.project.steps import silhouettes_from_masks
     from gaitcore.project.storage import save_project as write_project
 
     clip_dir = Path(clip).absolute()

@@ -16,10 +16,11 @@ import pyqtgraph as pg
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QCheckBox, QHBoxLayout, QLabel, QVBoxLayout, QWidget
 
-from app.animation import CLAMP_RANGE, Animation, AnimationController
+from app.animation import AnimationController
 from app.posing import PosingController
 from app.state import AppState
 from app.widgets.follow import show_value
+from gaitcore.project.steps import CLAMP_RANGE, Animation
 
 
 class AnimationView(QWidget):

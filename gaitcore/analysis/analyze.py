@@ -18,7 +18,7 @@ from gaitcore.analysis.keyimages import KeySelection, select_key_images
 from gaitcore.analysis.spectrum import Diagnosis, Verdict, diagnose
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Progress
-from gaitcore.silhouettes.tracking import RoiClip, stabilize_rois
+from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiClip, stabilize_rois
 
 N_DIAGNOSIS_PCS = 5
 """Components kept for the spectral diagnosis table, whatever the number used to animate."""
@@ -55,7 +55,7 @@ class AnalysisSettings:
     keys: int = 4
     switching: bool = False
     alpha: float = DEFAULT_ALPHA
-    max_side_px: int | None = 160
+    max_side_px: int | None = WORK_SIDE_PX
     stabilize_roi: bool = True
     key_time_limit_s: float | None = 60.0
     pinned: tuple[int, ...] = ()
@@ -63,9 +63,9 @@ class AnalysisSettings:
 
     def __post_init__(self) -> None:
         if self.pcs < 1:
-            raise GaitInputError(f"--pcs must be at least 1, got {self.pcs}")
+            raise GaitInputError(f"the number of principal components must be at least 1, got {self.pcs}")
         if self.keys < 1:
-            raise GaitInputError(f"--keys must be at least 1, got {self.keys}")
+            raise GaitInputError(f"the number of key-images must be at least 1, got {self.keys}")
         if self.max_side_px is not None and self.max_side_px < 8:
             raise GaitInputError(f"working size must be at least 8 pixels, got {self.max_side_px}")
 
@@ -158,7 +158,7 @@ def analyze_silhouettes(
         The silhouettes come from sketches (changes the advice of an unusable diagnosis).
     progress : callable(done, total) -> bool, optional
         Reports the PCA (one pass per crop placement) and the key search as equal stages;
-        returning False cancels with ``InterruptedError``.
+        returning False cancels with ``Cancelled``.
 
     Raises
     ------
@@ -242,7 +242,8 @@ def rekey(
     if settings.pcs > analysis.projections.shape[1]:
         raise GaitInputError(
             f"the clip has only {analysis.projections.shape[1]} independent silhouette "
-            f"change(s) for --pcs {settings.pcs}; use fewer components or a clip with more motion"
+            f"change(s) for {settings.pcs} principal components; use at most "
+            f"{analysis.projections.shape[1]} or a clip with more motion"
         )
     coords = analysis.projections[:, : settings.pcs]
     selection = select_key_images(

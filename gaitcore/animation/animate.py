@@ -1,17 +1,102 @@
 """Animate from key poses: the pose of every frame from the posed key-images (paper 2.4, 3.2).
 
-One function, :func:`animate`, that the ``gaitcore animate`` command and the app both call:
-plain RBF interpolation, or switching models when the keys have alternates.
+:func:`animate_record` is what the ``gaitcore animate`` command and the app both call: it takes
+an :class:`AnalysisRecord` (the numbers of ``analysis.json``, or of an analysis in memory,
+rounded the same way, so both give bit-identical curves) and the poses of the keys, checks
+them, and runs :func:`animate`: plain RBF interpolation, or switching models when the keys
+have alternates.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
+from gaitcore.analysis.analyze import Analysis
 from gaitcore.analysis.kernel import DEFAULT_ALPHA
 from gaitcore.animation.rbf import RBFPoseMap
 from gaitcore.animation.switching import SwitchingModel
 from gaitcore.errors import GaitInputError
+
+STORED_DECIMALS = 10
+"""Decimals kept of every projection and angle in ``analysis.json`` (and in a record)."""
+
+
+def stored(values: np.ndarray) -> np.ndarray:
+    """``values`` as ``analysis.json`` keeps them (rounded to :data:`STORED_DECIMALS`)."""
+    return np.round(np.asarray(values, dtype=float), STORED_DECIMALS)
+
+
+@dataclass(frozen=True, eq=False)
+class AnalysisRecord:
+    """What animating needs from an analysis: the PCA coordinates, the keys and the kernel.
+
+    Read from ``analysis.json`` (:func:`gaitcore.io.analysis_file.read_analysis_json`) or made
+    from an analysis in memory (:meth:`from_analysis`); the numbers are the same either way.
+    """
+
+    n_frames: int
+    projections: np.ndarray
+    filtered_projections: np.ndarray
+    loop_angle: np.ndarray
+    key_frames: tuple[int, ...]
+    alternate_frames: tuple[int, ...] | None
+    alpha: float
+
+    @classmethod
+    def from_analysis(cls, analysis: Analysis) -> AnalysisRecord:
+        """The record that ``analysis.json`` of ``analysis`` would give back."""
+        pcs = analysis.settings.pcs
+        return cls(analysis.n_frames, stored(analysis.coords),
+                   stored(analysis.diagnosis.filtered[:, :pcs]), stored(analysis.loop_angle),
+                   tuple(int(f) for f in analysis.key_frames),
+                   None if analysis.alternate_frames is None
+                   else tuple(int(f) for f in analysis.alternate_frames),
+                   float(analysis.settings.alpha))
+
+
+def animate_record(
+    record: AnalysisRecord,
+    poses: dict[int, np.ndarray],
+    *,
+    alternates: tuple[int, ...] | None = None,
+    filtered: bool = False,
+    clamp: tuple[float, float] | None = None,
+) -> np.ndarray:
+    """Pose of every frame of an analysed clip from the poses of its key-images.
+
+    Parameters
+    ----------
+    record : AnalysisRecord
+    poses : dict of int to ndarray of shape (k,)
+        Pose of every key frame (and alternate frame, with ``alternates``); any other frame
+        is refused.
+    alternates : tuple of int, optional
+        The alternates to animate with (switching models); None animates with the keys alone.
+    filtered : bool
+        Drive the animation with the band-pass filtered trajectories.
+    clamp : (float, float), optional
+        Clamp the RBF weights to this range.
+
+    Returns
+    -------
+    ndarray of shape (n_frames, k)
+
+    Raises
+    ------
+    GaitInputError
+        Poses of frames that are not keys or alternates, missing poses, or a failed fit.
+    """
+    posed = set(record.key_frames) | set(alternates or ())
+    extra = sorted(set(poses) - posed)
+    if extra:
+        raise GaitInputError(
+            f"frame(s) {extra} are not key-images of this analysis (keys {list(record.key_frames)}"
+            + (f", alternates {list(alternates)}" if alternates else "") + ")")
+    coords = record.filtered_projections if filtered else record.projections
+    return animate(coords, record.key_frames, poses, alternate_frames=alternates,
+                   theta=record.loop_angle, alpha=record.alpha, clamp=clamp)
 
 
 def animate(

@@ -59,6 +59,10 @@ class _VideoReader:
         self.cap.release()
 
 
+DEFAULT_FPS = 24.0
+"""Frames per second assumed when the footage does not say (image folders, GIFs): film's rate."""
+
+
 class FrameSource:
     """Frames of a clip with random access, a bounded cache and streaming iteration.
 

@@ -6,12 +6,12 @@ The file is plain JSON (never pickle). Frame numbers are 0-based in source order
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from gaitcore.analysis.analyze import Analysis
+from gaitcore.animation.animate import AnalysisRecord, stored
 from gaitcore.errors import GaitInputError
 
 FORMAT = "gaitstudio-analysis"
@@ -19,7 +19,7 @@ VERSION = 1
 
 
 def analysis_to_dict(analysis: Analysis, *, source: str = "") -> dict:
-    """The JSON-ready content of ``analysis.json`` (see DESIGN.md, Contracts)."""
+    """The JSON-ready content of ``analysis.json`` (the contract in README.md, The gaitcore command)."""
     d = analysis.diagnosis
     s = analysis.settings
     pcs = s.pcs
@@ -44,9 +44,9 @@ def analysis_to_dict(analysis: Analysis, *, source: str = "") -> dict:
         "condition_number": float(analysis.selection.condition_number),
         "exact": bool(analysis.selection.exact),
         "lost_frames": list(analysis.lost_frames),
-        "projections": np.round(analysis.coords, 10).tolist(),
-        "filtered_projections": np.round(d.filtered[:, :pcs], 10).tolist(),
-        "loop_angle": np.round(analysis.loop_angle, 10).tolist(),
+        "projections": stored(analysis.coords).tolist(),
+        "filtered_projections": stored(d.filtered[:, :pcs]).tolist(),
+        "loop_angle": stored(analysis.loop_angle).tolist(),
     }
     if analysis.alternate_frames is not None:
         out["alternate_frames"] = [int(f) for f in analysis.alternate_frames]
@@ -60,19 +60,6 @@ def write_analysis_json(path: str | Path, analysis: Analysis, *, source: str = "
     tmp = path.with_suffix(path.suffix + ".tmp")
     tmp.write_text(json.dumps(analysis_to_dict(analysis, source=source), indent=1))
     tmp.replace(path)
-
-
-@dataclass(frozen=True, eq=False)
-class AnalysisRecord:
-    """What ``gaitcore animate`` needs from an ``analysis.json``."""
-
-    n_frames: int
-    projections: np.ndarray
-    filtered_projections: np.ndarray
-    loop_angle: np.ndarray
-    key_frames: tuple[int, ...]
-    alternate_frames: tuple[int, ...] | None
-    alpha: float
 
 
 def read_analysis_json(path: str | Path) -> AnalysisRecord:
@@ -91,16 +78,6 @@ def read_analysis_json(path: str | Path) -> AnalysisRecord:
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise GaitInputError(f"{path} is not a readable analysis file ({exc})") from None
     return analysis_record_from_dict(data, where=str(path))
-
-
-def analysis_record(analysis: Analysis) -> AnalysisRecord:
-    """The :class:`AnalysisRecord` that ``analysis.json`` of ``analysis`` would give back.
-
-    The numbers are exactly those :func:`read_analysis_json` reads from the file written by
-    :func:`write_analysis_json` (JSON keeps every float exactly), so the GUI and
-    ``gaitcore animate`` compute bit-identical curves from one analysis.
-    """
-    return analysis_record_from_dict(analysis_to_dict(analysis), where="analysis")
 
 
 def analysis_record_from_dict(data: object, *, where: str = "analysis") -> AnalysisRecord:

@@ -20,6 +20,10 @@ if TYPE_CHECKING:
 
 MAX_LISTED = 12
 """Missing channels named in an error message before '... and N more'."""
+MAX_LISTED_JOINTS = 10
+"""Joints named in an error message before '... and N more'."""
+IGNORED_COLUMNS = ("time_s",)
+"""Columns of a pose table that are never pose channels."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -137,3 +141,37 @@ def pose_matrix(skeleton: Skeleton, table: PoseTable) -> np.ndarray:
             f"{skeleton.name!r}: {listed}{more}; give the key poses a column for every channel "
             "of the skeleton")
     return np.asarray(table.values, float)[:, [index[c] for c in skeleton.channel_names]]
+
+
+def joints_of(channels: list[str]) -> str:
+    """The joints of ``channels`` ('joint.rz' ...), named for a message."""
+    joints = list(dict.fromkeys(c.rsplit(".", 1)[0] for c in channels))
+    more = (f" and {len(joints) - MAX_LISTED_JOINTS} more"
+            if len(joints) > MAX_LISTED_JOINTS else "")
+    return ", ".join(joints[:MAX_LISTED_JOINTS]) + more
+
+
+def map_channels(columns: tuple[str, ...], values: np.ndarray, skeleton: Skeleton
+                 ) -> tuple[np.ndarray, list[str]]:
+    """A pose of ``skeleton`` from one row of named values, matched by channel name.
+
+    Returns
+    -------
+    pose : ndarray of shape (k,)
+    ignored : list of str
+        Columns that are not channels of the skeleton.
+
+    Raises
+    ------
+    GaitInputError
+        Channels of the skeleton without a column; the message names their joints.
+    """
+    index = {c: i for i, c in enumerate(columns)}
+    missing = [c for c in skeleton.channel_names if c not in index]
+    if missing:
+        raise GaitInputError(
+            f"it lacks {len(missing)} of the {skeleton.n_channels} channels of the rig "
+            f"{skeleton.name!r}, on joints {joints_of(missing)}; nothing was changed")
+    pose = np.array([values[index[c]] for c in skeleton.channel_names], dtype=float)
+    ignored = [c for c in columns if c not in skeleton.channel_names and c not in IGNORED_COLUMNS]
+    return pose, ignored

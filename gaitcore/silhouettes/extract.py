@@ -16,7 +16,7 @@ from gaitcore.errors import GaitInputError
 from gaitcore.footage.image_folder import iter_mask_folder, list_image_files
 from gaitcore.progress import Progress
 from gaitcore.silhouettes.annotations import Rect
-from gaitcore.silhouettes.tracking import RoiClip, crop_rois
+from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiClip, crop_rois
 
 
 def is_mask_folder(path: Path) -> bool:
@@ -49,7 +49,7 @@ def load_silhouettes(
     *,
     subject: Sequence[Rect] = (),
     background: Sequence[Rect] = (),
-    max_side: int | None = 160,
+    max_side: int | None = WORK_SIDE_PX,
     progress: Progress | None = None,
 ) -> RoiClip:
     """Tracked, fixed-size silhouettes of the subject in every frame of ``source``.

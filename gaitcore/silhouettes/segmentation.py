@@ -33,6 +33,7 @@ from gaitcore.progress import Progress, report
 from gaitcore.silhouettes.annotations import Rect
 from gaitcore.silhouettes.colour_model import ColourModel, check_frame, rect_mask
 from gaitcore.silhouettes.tracking import (
+    WORK_SIDE_PX,
     RoiAccumulator,
     RoiClip,
     SubjectTracker,
@@ -380,7 +381,7 @@ def segment_clip(
     method: str | None = None,
     settings: SegmentationSettings | None = None,
     margin: float = 0.05,
-    max_side: int | None = 160,
+    max_side: int | None = WORK_SIDE_PX,
     progress: Progress | None = None,
     mask_sink: MaskSink | None = None,
 ) -> RoiClip:
@@ -400,11 +401,11 @@ def segment_clip(
     margin : float
         Border around the largest bounding box of the silhouette, fraction of its size.
     max_side : int or None
-        Longer side of the ROI windows in pixels (default 160, the PCA working size of
+        Longer side of the ROI windows in pixels (default :data:`~gaitcore.silhouettes.tracking.WORK_SIDE_PX`, the PCA working size of
         ``gaitcore.analysis.analyze``; 10,000 frames then take at most 256 MB); None keeps the
         source resolution.
     progress : callable(done, total) -> bool, optional
-        Called after each frame; returning False cancels with ``InterruptedError``.
+        Called after each frame; returning False cancels with ``Cancelled``.
     mask_sink : callable(frame_index, mask), optional
         Receives each full-frame silhouette, (rows, cols) uint8 0/255 (zeros where lost).
 
@@ -417,7 +418,7 @@ def segment_clip(
     ------
     GaitInputError
         Empty clip, bad rectangles, unreadable frames, or no subject in any frame.
-    InterruptedError
+    Cancelled
         When ``progress`` returned False.
     """
     s = settings or SegmentationSettings()

@@ -17,7 +17,7 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Progress, report
 from gaitcore.silhouettes.annotations import Stroke
-from gaitcore.silhouettes.tracking import RoiAccumulator, RoiClip
+from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiAccumulator, RoiClip
 
 _SHIFT = 4  # fixed-point bits of the vertex coordinates given to OpenCV (1/16 pixel)
 FLOW_MARGIN_PX = 64  # optical flow is computed in the strokes' bounding box grown by this
@@ -111,7 +111,7 @@ def crop_sketches(
     shape: tuple[int, int],
     *,
     margin: float = 0.05,
-    max_side: int | None = 160,
+    max_side: int | None = WORK_SIDE_PX,
     progress: Progress | None = None,
 ) -> RoiClip:
     """Sketches of a clip as fixed-size ROI crops, like segmented silhouettes.
@@ -125,7 +125,7 @@ def crop_sketches(
     shape : (rows, cols)
         Frame size.
     margin, max_side, progress
-        As in :func:`gaitcore.silhouettes.tracking.crop_rois` (but ``max_side`` defaults to 160, the
+        As in :func:`gaitcore.silhouettes.tracking.crop_rois` (but ``max_side`` defaults to :data:`~gaitcore.silhouettes.tracking.WORK_SIDE_PX`, the
         PCA working size, as for segmentation).
 
     Returns

@@ -21,6 +21,10 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Progress, report
 
+WORK_SIDE_PX = 160
+"""Longer side, in pixels, of the ROI crops the analysis works on (the PCA working size): small
+enough that a long clip's silhouettes fit in memory, large enough to keep the legs."""
+
 
 @dataclass(frozen=True, eq=False)
 class RoiClip:
@@ -209,7 +213,7 @@ def track_subject(
     min_area_frac : float
         Components smaller than this fraction of the frame are ignored as noise.
     progress : callable(done, total) -> bool, optional
-        Called after each frame; returning False cancels with ``InterruptedError``.
+        Called after each frame; returning False cancels with ``Cancelled``.
 
     Returns
     -------
@@ -265,7 +269,7 @@ def crop_rois(
     min_area_frac : float
         Components smaller than this fraction of the frame are ignored as noise.
     progress : callable(done, total) -> bool, optional
-        Returning False cancels with ``InterruptedError`` (total is 0 for an iterable).
+        Returning False cancels with ``Cancelled`` (total is 0 for an iterable).
 
     Returns
     -------
@@ -423,14 +427,3 @@ def _paste(window: np.ndarray, tight: np.ndarray, x: int, y: int) -> None:
     cw, ch = min(tw - sx0, w - dx0), min(th - sy0, h - dy0)
     if cw > 0 and ch > 0:
         window[dy0 : dy0 + ch, dx0 : dx0 + cw] |= tight[sy0 : sy0 + ch, sx0 : sx0 + cw]
-
-
-def _crop_padded(image: np.ndarray, x0: int, y0: int, w: int, h: int) -> np.ndarray:
-    """Crop image[y0:y0+h, x0:x0+w], padding with zeros outside the frame."""
-    out = np.zeros((h, w), dtype=image.dtype)
-    rows, cols = image.shape
-    sx0, sy0 = max(x0, 0), max(y0, 0)
-    sx1, sy1 = min(x0 + w, cols), min(y0 + h, rows)
-    if sx1 > sx0 and sy1 > sy0:
-        out[sy0 - y0 : sy1 - y0, sx0 - x0 : sx1 - x0] = image[sy0:sy1, sx0:sx1]
-    return out

@@ -288,3 +288,26 @@ def test_the_footage_fit_is_one_undo_step_per_control_and_kept_in_the_project(qt
     assert not viewport.flip.isChecked() and viewport.fit_scale.value() == 110
     viewport.fit_auto.click()
     assert window.state.project.footage_fit.scale == 1.0 and viewport.fit_scale.value() == 100
+
+
+def test_a_segmentation_started_on_one_clip_never_lands_in_the_next(qtbot, window, canter_clip):
+    """Open another file while a clip segments: the old clip's silhouettes are dropped."""
+    window.open_path(canter_clip / "images")
+    wait_ready(qtbot, window)
+    choose_tool(window, Tool.SUBJECT)
+    drag(qtbot, window, [(140, 100), (180, 125)])
+    choose_tool(window, Tool.BACKGROUND)
+    drag(qtbot, window, [(5, 5), (310, 35)])
+    job = window.tools.segment()
+    finished = []
+    job.finished.connect(lambda: finished.append(1))
+    qtbot.waitSignal(job.progressed, timeout=20_000).wait()
+    assert not finished, "the job must still be running when the other file opens"
+    window.open_path(canter_clip / "masks")  # another project, opened mid-segmentation
+    qtbot.waitUntil(lambda: not window.runner.busy, timeout=60_000)
+    assert finished
+    opened = window.state.project
+    assert opened.footage.name == "masks"
+    assert not opened.subject_rects and opened.silhouettes is not None
+    assert opened.silhouettes.origin == "masks"  # the tracked masks, not the old clip's cut-out
+    assert window.state.undo_stack.count() == 0

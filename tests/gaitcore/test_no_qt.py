@@ -1,4 +1,4 @@
-"""gaitcore must work on a machine without any Qt binding (DESIGN.md, Architecture)."""
+"""gaitcore must work on a machine without any Qt binding (README.md, Layout; an import-linter contract too)."""
 
 import subprocess
 import sys

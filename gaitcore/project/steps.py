@@ -1,0 +1,221 @@
+"""Project-level steps: what the ``gaitcore`` command and the app both do to a clip.
+
+Each step a user takes is one function here, Qt-free, with progress and Cancel where it is
+long: open the footage, get silhouettes (segment, track masks, rasterize sketches), analyse,
+choose the keys again, read a rig, animate from the posed keys. The command calls them in a
+row; the app calls them from its jobs and controllers and keeps only adapters (signals, undo
+commands, widgets). Errors are :class:`~gaitcore.errors.GaitInputError` lines that read well
+in a dialog and in a terminal alike.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from gaitcore.analysis.analyze import Analysis, AnalysisSettings, analyze_silhouettes, rekey
+from gaitcore.animation.animate import AnalysisRecord, animate_record
+from gaitcore.animation.weights import InterpolationWeights, interpolation_weights, loop_cycle
+from gaitcore.errors import GaitInputError
+from gaitcore.footage.image_folder import iter_mask_folder
+from gaitcore.footage.sources import DEFAULT_FPS, FrameSource, open_frames
+from gaitcore.io.bvh.reader import read_bvh
+from gaitcore.progress import Progress
+from gaitcore.project.document import AnimationOptions, Project, Silhouettes
+from gaitcore.rig.skeleton import Skeleton
+from gaitcore.silhouettes.segmentation import segment_clip
+from gaitcore.silhouettes.sketch import crop_sketches
+from gaitcore.silhouettes.tracking import WORK_SIDE_PX, crop_rois
+
+__all__ = [
+    "Animation", "CLAMP_RANGE", "CENTIMETRE_RIG_M", "alternates_in_use", "analyze",
+    "animate_project", "frame_rate", "frames_to_pose", "missing_poses", "open_source",
+    "read_rig", "rekey", "segment", "silhouettes_from_masks", "sketched_silhouettes",
+]
+
+CLAMP_RANGE = (0.0, 1.0)
+"""The RBF weights' range when the project's animation options clamp them."""
+CENTIMETRE_RIG_M = 10.0
+"""A BVH rig taller than this (in file units read as metres) is taken to be in centimetres."""
+
+
+# -- footage ---------------------------------------------------------------------------------
+def open_source(project: Project) -> FrameSource | None:
+    """The footage of ``project`` over its frame range (None when it has none).
+
+    Raises
+    ------
+    GaitInputError
+        The footage cannot be read.
+    """
+    if project.footage is None:
+        return None
+    return open_frames(project.footage, start=project.frame_start, stop=project.frame_stop,
+                       fps=project.fps)
+
+
+def frame_rate(project: Project, source: FrameSource | None) -> float:
+    """Frames per second of the clip: the footage's, else the project's, else the default."""
+    return float((source.fps if source is not None else None) or project.fps or DEFAULT_FPS)
+
+
+# -- silhouettes -----------------------------------------------------------------------------
+def silhouettes_from_masks(folder: Path, progress: Progress | None = None) -> Silhouettes:
+    """Tracked silhouettes of a folder of binary masks, streamed (segmentation is skipped)."""
+    roi = crop_rois(iter_mask_folder(Path(folder)), max_side=WORK_SIDE_PX, progress=progress)
+    return Silhouettes(roi, "masks")
+
+
+def segment(source: FrameSource, project: Project, progress: Progress | None = None, *,
+            mask_sink: Callable[[int, np.ndarray], None] | None = None) -> Silhouettes:
+    """Segment the whole clip from the project's rectangles (paper Section 2.2).
+
+    Raises
+    ------
+    GaitInputError
+        No subject or no background rectangle, or no subject found.
+    """
+    if not project.subject_rects or not project.background_rects:
+        raise GaitInputError("draw at least one subject and one background rectangle on the "
+                             "first frame, then segment again")
+    roi = segment_clip(source, project.subject_rects, project.background_rects,
+                       progress=progress, mask_sink=mask_sink, max_side=WORK_SIDE_PX)
+    return Silhouettes(roi, "segmented")
+
+
+def sketched_silhouettes(project: Project, n_frames: int, shape_rc: tuple[int, int],
+                         progress: Progress | None = None) -> Silhouettes:
+    """Silhouettes made of the sketch strokes; frames without strokes count as lost."""
+    roi = crop_sketches(project.strokes, n_frames, shape_rc, max_side=WORK_SIDE_PX,
+                        progress=progress)
+    return Silhouettes(roi, "sketched")
+
+
+# -- analysis --------------------------------------------------------------------------------
+def analyze(silhouettes: Silhouettes, settings: AnalysisSettings,
+            progress: Progress | None = None) -> Analysis:
+    """The analysis step of the paper (Sections 2.3, 3.1, 3.2, 5.2) on silhouettes.
+
+    To choose the keys again on the same silhouettes, call :func:`rekey` instead: it reuses
+    the PCA.
+    """
+    return analyze_silhouettes(silhouettes.roi, settings, sketched=silhouettes.origin == "sketched",
+                               progress=progress)
+
+
+# -- rig and poses ---------------------------------------------------------------------------
+def read_rig(path: Path) -> tuple[Skeleton, str]:
+    """A rig from a skeleton JSON or a BVH file, and a note on how it was read ('' if none).
+
+    A BVH rig taller than :data:`CENTIMETRE_RIG_M` read as metres is read in centimetres.
+
+    Raises
+    ------
+    GaitInputError
+        Unreadable or invalid file.
+    """
+    path = Path(path)
+    if path.suffix.lower() != ".bvh":
+        return Skeleton.from_json(path), ""
+    skeleton = read_bvh(path)[0]
+    rest = skeleton.joint_positions(skeleton.rest_pose())
+    if np.ptp(rest[:, 1]) > CENTIMETRE_RIG_M:
+        return read_bvh(path, scale=0.01)[0], f"{path.name}: read in centimetres"
+    return skeleton, ""
+
+
+def alternates_in_use(project: Project, analysis: Analysis | None) -> tuple[int, ...]:
+    """The accepted alternates when switching is on and they still pair with the keys."""
+    if analysis is None or not project.settings.switching:
+        return ()
+    keys, alts = analysis.key_frames, project.alternates
+    if len(alts) != len(keys) or set(alts) & set(keys):
+        return ()
+    return tuple(alts)
+
+
+def frames_to_pose(project: Project, analysis: Analysis | None) -> tuple[int, ...]:
+    """Key-images, then the alternates in use: every frame that needs a pose."""
+    if analysis is None:
+        return ()
+    return tuple(analysis.key_frames) + alternates_in_use(project, analysis)
+
+
+def missing_poses(project: Project, analysis: Analysis | None, n_channels: int) -> tuple[int, ...]:
+    """Frames to pose that have no pose (or one of another rig's length)."""
+    return tuple(f for f in frames_to_pose(project, analysis)
+                 if len(project.key_poses.get(f, ())) != n_channels)
+
+
+# -- animation -------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class Animation:
+    """Curves of every frame and what produced them.
+
+    Attributes
+    ----------
+    curves : ndarray of shape (n, k)
+        A pose per clip frame, laid out as ``skeleton.channel_names``.
+    weights : InterpolationWeights
+    options : AnimationOptions
+    skeleton : Skeleton
+    cycle_start : int
+        First clip frame of the loop cycle (0 without ``options.loop``).
+    cycle : ndarray of shape (P, k) or None
+        The loop cycle when ``options.loop``.
+    """
+
+    curves: np.ndarray
+    weights: InterpolationWeights
+    options: AnimationOptions
+    skeleton: Skeleton
+    cycle_start: int = 0
+    cycle: np.ndarray | None = None
+
+    def pose_at(self, frame: int) -> np.ndarray:
+        """The pose shown at clip frame ``frame`` (the loop repeats in step with the clip)."""
+        if self.cycle is not None:
+            return self.cycle[(frame - self.cycle_start) % len(self.cycle)]
+        return self.curves[min(max(frame, 0), len(self.curves) - 1)]
+
+    def exported(self) -> tuple[np.ndarray, np.ndarray]:
+        """Frame numbers and poses to export: every clip frame, or the cycle from 0."""
+        if self.cycle is not None:
+            return np.arange(len(self.cycle)), self.cycle
+        return np.arange(len(self.curves)), self.curves
+
+
+def animate_project(project: Project, analysis: Analysis | None, skeleton: Skeleton,
+                    options: AnimationOptions = AnimationOptions()) -> Animation:
+    """Animate the clip from the posed keys (and alternates), as ``gaitcore animate`` does.
+
+    The numbers come from :meth:`AnalysisRecord.from_analysis`, those ``analysis.json``
+    holds, so an export from the app and from the command agree byte for byte.
+
+    Raises
+    ------
+    GaitInputError
+        No analysis, keys without a pose (the message lists them), or a failed interpolation.
+    """
+    if analysis is None:
+        raise GaitInputError("no key-images yet: analyse the clip first")
+    missing = missing_poses(project, analysis, skeleton.n_channels)
+    if missing:
+        raise GaitInputError(f"pose every key first (missing: frames {', '.join(map(str, missing))})")
+    record = AnalysisRecord.from_analysis(analysis)
+    alternates = alternates_in_use(project, analysis) or None
+    posed = record.key_frames + (alternates or ())
+    poses = {f: np.asarray(project.key_poses[f], dtype=float) for f in posed}
+    clamp = CLAMP_RANGE if options.clamp else None
+    curves = animate_record(record, poses, alternates=alternates, filtered=options.filtered,
+                            clamp=clamp)
+    coords = record.filtered_projections if options.filtered else record.projections
+    weights = interpolation_weights(coords, record.key_frames, alternate_frames=alternates,
+                                    theta=record.loop_angle, alpha=record.alpha, clamp=clamp)
+    start, cycle = 0, None
+    if options.loop:
+        start, cycle = loop_cycle(curves, analysis.diagnosis.period_frames)
+    return Animation(curves, weights, options, skeleton, start, cycle)
