@@ -10,7 +10,7 @@ the GUI thread.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from PySide6.QtCore import QObject, QTimer, Signal
@@ -23,6 +23,8 @@ from gaitcore.animation.animate import animate
 from gaitcore.animation.weights import InterpolationWeights, interpolation_weights, loop_cycle
 from gaitcore.errors import GaitInputError
 from gaitcore.io.analysis_file import analysis_record
+from gaitcore.io.motion import ExportMotion, export_motion
+from gaitcore.progress import Progress
 from gaitcore.project.document import AnimationOptions, Project
 from gaitcore.rig.skeleton import Skeleton
 
@@ -45,6 +47,10 @@ class Animation:
         First clip frame of the loop cycle (0 without ``options.loop``).
     cycle : ndarray of shape (P, k) or None
         The loop cycle when ``options.loop``.
+    key_poses : dict of int to ndarray of shape (k,)
+        The posed frames animated from (their root positions give the export's speed).
+    period_frames : float
+        Gait period the loop is cut at.
     """
 
     curves: np.ndarray
@@ -53,12 +59,24 @@ class Animation:
     skeleton: Skeleton
     cycle_start: int = 0
     cycle: np.ndarray | None = None
+    key_poses: dict[int, np.ndarray] = field(default_factory=dict)
+    period_frames: float = float("nan")
 
     def pose_at(self, frame: int) -> np.ndarray:
         """The pose shown at clip frame ``frame`` (the loop repeats in step with the clip)."""
         if self.cycle is not None:
             return self.cycle[(frame - self.cycle_start) % len(self.cycle)]
         return self.curves[min(max(frame, 0), len(self.curves) - 1)]
+
+    def export_motion(self, progress: Progress | None = None) -> ExportMotion:
+        """The motion the exporters write, as ``gaitcore animate`` makes it: loop or clip,
+        root motion and ground contact of :attr:`options` (seconds on long clips: run it off
+        the GUI thread)."""
+        return export_motion(self.curves, self.skeleton.channel_names, key_poses=self.key_poses,
+                             skeleton=self.skeleton, loop=self.options.loop,
+                             period_frames=self.period_frames,
+                             root_motion=self.options.root_motion,
+                             ground_contact=self.options.ground_contact, progress=progress)
 
     def exported(self) -> tuple[np.ndarray, np.ndarray]:
         """Frame numbers and poses to export: every clip frame, or the cycle from 0."""
@@ -97,7 +115,8 @@ def compute_animation(project: Project, analysis: Analysis | None, skeleton: Ske
     start, cycle = 0, None
     if options.loop:
         start, cycle = loop_cycle(curves, analysis.diagnosis.period_frames)
-    return Animation(curves, weights, options, skeleton, start, cycle)
+    return Animation(curves, weights, options, skeleton, start, cycle, poses,
+                     float(analysis.diagnosis.period_frames))
 
 
 class AnimationController(QObject):
