@@ -161,8 +161,8 @@ def _travel(names: tuple[str, ...], key_poses: Mapping[int, np.ndarray],
             frames: np.ndarray) -> np.ndarray:
     """World offset of each frame from travelling at the keys' speed, shape (n, 3)."""
     travel = np.zeros((len(frames), 3))
-    axes = [("tx", "tz").index(n.rsplit(".", 1)[-1]) * 2 for n in names
-            if n.rsplit(".", 1)[-1] in ("tx", "tz")]
+    axes = [{"tx": 0, "tz": 2}[names[i].rsplit(".", 1)[-1]]
+            for i in horizontal_root_channels(names)]  # X first, as the velocity
     travel[:, axes] = frames[:, None] * _velocity(names, key_poses)
     return travel
 

@@ -14,6 +14,7 @@ import json
 import os
 import subprocess
 import sys
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +34,7 @@ FPS = 24.0
 pytestmark = [pytest.mark.slow, pytest.mark.gl]
 
 
+@lru_cache(maxsize=1)
 def _blender_python() -> str:
     candidates = [os.environ.get("GAITSTUDIO_BLENDER_PYTHON"),
                   str(ROOT / ".venv-blender" / "bin" / "python"), sys.executable]
@@ -54,6 +56,7 @@ def _blender_python() -> str:
 @pytest.fixture(scope="module")
 def clip(tmp_path_factory) -> dict:
     """A synthetic canter through the whole pipeline, exported with the defaults and as a loop."""
+    _blender_python()  # skip before the work when there is no Blender
     root = tmp_path_factory.mktemp("blender")
     assert main(["synth", "--gait", "canter", "--frames", str(N_FRAMES), "--out",
                  str(root / "syn"), "--width", "160", "--height", "120"]) == 0
