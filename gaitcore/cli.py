@@ -211,15 +211,20 @@ def _run_animate(args: argparse.Namespace) -> int:
     write_pose_table(args.out, out_table, fps=args.fps if args.csv_time else None)
     n = len(motion.frames)
     print(f"wrote {args.out} ({n} frames, {len(table.columns)} channels): {motion.summary()}")
-    for foot in motion.contact.feet if motion.contact is not None else ():
-        print(f"  {foot.name}: {foot.stance_frames} frames in stance, moved in "
-              f"{foot.moved_frames} frames by up to {100 * foot.max_shift_m:.1f} cm "
-              f"(mean {100 * foot.mean_shift_m:.1f} cm); lowest {100 * foot.lowest_before_m:.1f}"
-              f" -> {100 * foot.lowest_after_m:.1f} cm")
+    _print_contact(motion.contact)
     for flag, path in exports:  # the flag, not the file's suffix, names the format
         EXPORTERS[f".{flag}"].write(path, skeleton, out_table, args.fps, args.bone_names)
         print(f"wrote {path} ({skeleton.n_joints} joints, {n} frames at {args.fps:g} fps)")
     return 0
+
+
+def _print_contact(contact) -> None:
+    """How far the ground contact clean-up moved each foot, one line per foot."""
+    for foot in contact.feet if contact is not None else ():
+        print(f"  {foot.name}: {foot.stance_frames} frames in stance, moved in "
+              f"{foot.moved_frames} frames by up to {100 * foot.max_shift_m:.1f} cm "
+              f"(mean {100 * foot.mean_shift_m:.1f} cm); lowest {100 * foot.lowest_before_m:.1f}"
+              f" -> {100 * foot.lowest_after_m:.1f} cm")
 
 
 def _int_list(text: str) -> tuple[int, ...]:

@@ -106,15 +106,8 @@ def export_motion(curves: np.ndarray, channel_names: Sequence[str], *,
         Unknown root motion, a loop without a usable period or too short a clip, forward
         motion with fewer than two posed frames, curves without a channel of the skeleton.
     """
-    if root_motion not in (AUTO, *ROOT_MODES):
-        raise GaitInputError(f"unknown root motion {root_motion!r}; use one of "
-                             f"{', '.join((AUTO, *ROOT_MODES))}")
-    mode = ("in-place" if loop else "forward") if root_motion == AUTO else root_motion
     names = tuple(channel_names)
-    missing = [] if skeleton is None else sorted(set(skeleton.channel_names) - set(names))
-    if missing:
-        raise GaitInputError(f"the curves lack {len(missing)} channel(s) of skeleton "
-                             f"{skeleton.name!r} (e.g. {missing[0]}); pose every channel")
+    mode = _check(names, skeleton, root_motion, loop)
     x = np.asarray(curves, dtype=float)
     still = apply_root_motion(x, names, "in-place", key_poses=key_poses)
     start = None
@@ -136,6 +129,19 @@ def export_motion(curves: np.ndarray, channel_names: Sequence[str], *,
         closing[0, horizontal_root_channels(names)] += _stride(names, key_poses, len(still), mode)
         poses = np.concatenate([poses, closing])
     return ExportMotion(np.arange(len(poses)), poses, mode, start, contact)
+
+
+def _check(names: tuple[str, ...], skeleton: Skeleton | None, root_motion: str,
+           loop: bool) -> str:
+    """The root motion to apply (``auto`` resolved), after checking the request."""
+    if root_motion not in (AUTO, *ROOT_MODES):
+        raise GaitInputError(f"unknown root motion {root_motion!r}; use one of "
+                             f"{', '.join((AUTO, *ROOT_MODES))}")
+    missing = [] if skeleton is None else sorted(set(skeleton.channel_names) - set(names))
+    if missing:
+        raise GaitInputError(f"the curves lack {len(missing)} channel(s) of skeleton "
+                             f"{skeleton.name!r} (e.g. {missing[0]}); pose every channel")
+    return ("in-place" if loop else "forward") if root_motion == AUTO else root_motion
 
 
 def _with_root(poses: np.ndarray, curves: np.ndarray, names: tuple[str, ...], mode: str,

@@ -190,20 +190,30 @@ def clean_ground_contact(skeleton: Skeleton, poses: np.ndarray, *,
     targets = np.stack([_targets(before[:, i], heel_y[:, i] - before[:, i, 1], stance[:, i],
                                  ground, settings.blend_frames)
                         for i in range(len(feet))], axis=1)
-    out, total = p.copy(), len(p)
     rows = range(n, 2 * n) if cyclic and n > 1 else range(n)
-    for done, t in enumerate(rows):
-        report(progress, done, len(rows), f"ground contact cancelled at frame {done}")
-        for i, foot in enumerate(feet):
-            if np.linalg.norm(targets[t, i] - before[t, i]) > 1e-6:
-                out[t] = _reach(skeleton, out[t], foot, targets[t, i] - travel[t])
-    if cyclic and total > n:
+    moved = np.linalg.norm(targets - before, axis=2) > 1e-6
+    out = _solve_frames(skeleton, p, feet, targets - travel[:, None, :], moved, rows, progress)
+    if cyclic and len(p) > n:
         out, before, targets, stance, travel = (a[n:2 * n] for a in
                                                 (out, before, targets, stance, travel))
     after = skeleton.joint_positions(out)[:, index] + travel[:, None, :]
     reports = tuple(_report(name, before[:, i], after[:, i], targets[:, i], stance[:, i],
                             ground) for i, name in enumerate(feet))
     return ContactResult(out, stance, reports)
+
+
+def _solve_frames(skeleton: Skeleton, poses: np.ndarray, feet: tuple[str, ...],
+                  targets: np.ndarray, moved: np.ndarray, rows: range,
+                  progress: Progress | None) -> np.ndarray:
+    """Poses with every foot that ``moved`` (n, F) in the frames ``rows`` put on its target
+    (n, F, 3, in the poses' own frame: travel taken off)."""
+    out = poses.copy()
+    for done, t in enumerate(rows):
+        report(progress, done, len(rows), f"ground contact cancelled at frame {done}")
+        for i, foot in enumerate(feet):
+            if moved[t, i]:
+                out[t] = _reach(skeleton, out[t], foot, targets[t, i])
+    return out
 
 
 def stance_mask(foot_xyz: np.ndarray, ground_y_m: float, *, animal_speed_m: float,

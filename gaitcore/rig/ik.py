@@ -168,17 +168,8 @@ def solve_leg(skeleton: Skeleton, pose: np.ndarray, end_joint: str, target_xyz: 
     >>> result.reached
     True
     """
-    end = skeleton.joint_index(end_joint)
-    target = _target(target_xyz)
-    default_upper, default_knee = leg_joints(skeleton, end_joint)
-    upper = skeleton.joint_index(upper_joint) if upper_joint else default_upper
-    knee = skeleton.joint_index(knee_joint) if knee_joint else default_knee
-    foot = skeleton.joint_index(foot_joint) if foot_joint else None
-    path = _path_up(skeleton, end, upper)
-    if knee not in path[1:-1] or (foot is not None and foot not in path[:path.index(knee)]):
-        raise GaitInputError(f"solve_leg: {skeleton.joints[knee].name!r} must lie between "
-                             f"{skeleton.joints[upper].name!r} and {end_joint!r}, and the foot "
-                             "between the knee and the end")
+    end, target = skeleton.joint_index(end_joint), _target(target_xyz)
+    upper, knee, foot = _leg(skeleton, end_joint, upper_joint, knee_joint, foot_joint)
     chain = _Chain(skeleton, pose)
     foot_rotation = None if foot is None else chain.world[foot, :3, :3].copy()
     for _ in range(max(1, iterations)):
@@ -194,6 +185,21 @@ def solve_leg(skeleton: Skeleton, pose: np.ndarray, end_joint: str, target_xyz: 
         if np.linalg.norm(chain.position(end) - target) <= tolerance_m:
             break
     return _result(chain, end, target, tolerance_m)
+
+
+def _leg(skeleton: Skeleton, end_joint: str, upper_joint: str | None, knee_joint: str | None,
+         foot_joint: str | None) -> tuple[int, int, int | None]:
+    """Upper, knee and foot joint indices of a leg (defaults from :func:`leg_joints`), checked."""
+    default_upper, default_knee = leg_joints(skeleton, end_joint)
+    upper = skeleton.joint_index(upper_joint) if upper_joint else default_upper
+    knee = skeleton.joint_index(knee_joint) if knee_joint else default_knee
+    foot = skeleton.joint_index(foot_joint) if foot_joint else None
+    path = _path_up(skeleton, skeleton.joint_index(end_joint), upper)
+    if knee not in path[1:-1] or (foot is not None and foot not in path[:path.index(knee)]):
+        raise GaitInputError(f"solve_leg: {skeleton.joints[knee].name!r} must lie between "
+                             f"{skeleton.joints[upper].name!r} and {end_joint!r}, and the foot "
+                             "between the knee and the end")
+    return upper, knee, foot
 
 
 def solve_chain(skeleton: Skeleton, pose: np.ndarray, end_joint: str, target_xyz: np.ndarray,
@@ -246,8 +252,17 @@ def solve_chain(skeleton: Skeleton, pose: np.ndarray, end_joint: str, target_xyz
     if foot is not None and foot not in path[1:]:
         raise GaitInputError(f"solve_chain: the foot {foot_joint!r} must lie above {end_joint!r}")
     chain = _Chain(skeleton, pose)
-    foot_rotation = None if foot is None else chain.world[foot, :3, :3].copy()
     movers = [j for j in path[1:] if (chain.slots[j] >= 0).any() and j != foot]
+    best = _descend(chain, movers, end, foot, target, iterations=iterations, damping=damping,
+                    tolerance_m=tolerance_m)
+    return _result(_Chain(skeleton, best), end, target, tolerance_m)
+
+
+def _descend(chain: _Chain, movers: list[int], end: int, foot: int | None,
+             target: np.ndarray, *, iterations: int, damping: float,
+             tolerance_m: float) -> np.ndarray:
+    """Damped least-squares steps on ``chain``; the pose that came closest to the target."""
+    foot_rotation = None if foot is None else chain.world[foot, :3, :3].copy()
     best = (np.linalg.norm(chain.position(end) - target), chain.pose.copy())
     for _ in range(max(1, iterations)):
         effector, aim = _effector(chain, end, foot, foot_rotation, target)
@@ -264,9 +279,7 @@ def solve_chain(skeleton: Skeleton, pose: np.ndarray, end_joint: str, target_xyz
         miss = np.linalg.norm(chain.position(end) - target)
         if miss < best[0]:
             best = (miss, chain.pose.copy())
-    if np.linalg.norm(chain.position(end) - target) > best[0]:
-        chain = _Chain(skeleton, best[1])
-    return _result(chain, end, target, tolerance_m)
+    return best[1]
 
 
 def _effector(chain: _Chain, end: int, foot: int | None, foot_rotation: np.ndarray | None,

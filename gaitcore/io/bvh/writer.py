@@ -92,12 +92,14 @@ def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: fl
         lines.append(f"{pad}}}")
 
     emit(children[""][0], 0)
-    lines.append("MOTION")
-    lines.append(f"Frames: {len(table.frames)}")
-    lines.append(f"Frame Time: {1.0 / fps:.10g}")
     motion = np.column_stack(columns) if columns else np.zeros((len(table.frames), 0))
+    _write(Path(path), lines, motion, fps)
+
+
+def _write(path: Path, hierarchy: list[str], motion: np.ndarray, fps: float) -> None:
+    """The file: the HIERARCHY lines, then MOTION with one line per frame."""
+    lines = hierarchy + ["MOTION", f"Frames: {len(motion)}", f"Frame Time: {1.0 / fps:.10g}"]
     lines.extend(" ".join(f"{v:.6f}" for v in row) for row in motion)
-    path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
 
