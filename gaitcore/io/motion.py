@@ -7,7 +7,8 @@ called by ``gaitcore animate`` and by the app's Export menu alike:
    so that a loop can be cut without dragging the travel into the mismatch it spreads;
 2. one loop is cut (:func:`gaitcore.animation.weights.loop_cycle`) when asked;
 3. the feet are planted (:func:`gaitcore.rig.contact.clean_ground_contact`) as the animal
-   travels at the keys' speed, across the loop's seam when it is a loop;
+   travels at the keys' speed, across the loop's seam when it is a loop, where the posed
+   frames put them when a stance holds one;
 4. the root motion asked for goes back in: in place, forward at constant speed, or as the
    keys interpolate it;
 5. a loop gets a closing frame equal to its first (moved on by one stride when it goes
@@ -120,6 +121,8 @@ def export_motion(curves: np.ndarray, channel_names: Sequence[str], *,
         columns = [names.index(c) for c in skeleton.channel_names]
         contact = clean_ground_contact(skeleton, still[:, columns], cyclic=loop,
                                        travel_m=_travel(names, key_poses, frames),
+                                       anchors=[int(f) - frames[0] for f in key_poses
+                                                if frames[0] <= f <= frames[-1]],
                                        progress=progress)
         still = still.copy()
         still[:, columns] = contact.poses

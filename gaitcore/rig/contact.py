@@ -15,6 +15,7 @@ covered to every pose, so an in-place cycle is cleaned as the forward motion it 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -141,6 +142,7 @@ def find_feet(skeleton: Skeleton) -> tuple[str, ...]:
 
 def clean_ground_contact(skeleton: Skeleton, poses: np.ndarray, *,
                          travel_m: np.ndarray | None = None, cyclic: bool = False,
+                         anchors: Sequence[int] = (),
                          settings: ContactSettings = ContactSettings(),
                          progress: Progress | None = None) -> ContactResult:
     """Plant the feet through stance and keep them above the ground.
@@ -156,6 +158,10 @@ def clean_ground_contact(skeleton: Skeleton, poses: np.ndarray, *,
     cyclic : bool
         The poses are one loop: stances run across the end into the start, and the result
         loops as the input did.
+    anchors : sequence of int
+        Rows whose poses the artist made (the posed key-images, where the interpolation is
+        exact): a stance that holds one is planted where the foot is in it, not at the
+        median of the interpolated foot.
     settings : ContactSettings
     progress : callable (done, total) -> bool, optional
         Per frame; returning False cancels with ``InterruptedError``.
@@ -173,10 +179,13 @@ def clean_ground_contact(skeleton: Skeleton, poses: np.ndarray, *,
     skeleton.forward_kinematics(p[:1])  # one clear message for a wrong width
     travel = np.zeros((len(p), 3)) if travel_m is None else np.asarray(travel_m, float)
     n = len(p)
+    anchored = np.zeros(n, dtype=bool)
+    anchored[[int(a) for a in anchors if 0 <= a < n]] = True
     if cyclic and n > 1:  # three copies, cleaned as one clip; the middle one is the loop
         step = (travel[-1] - travel[0]) * n / (n - 1)
         p = np.concatenate([p, p, p])
         travel = np.concatenate([travel - step, travel, travel + step])
+        anchored = np.concatenate([anchored, anchored, anchored])
     feet = find_feet(skeleton)
     ground = _ground(skeleton, settings)
     index = [skeleton.joint_index(f) for f in feet]
@@ -188,7 +197,7 @@ def clean_ground_contact(skeleton: Skeleton, poses: np.ndarray, *,
     heel_y = skeleton.joint_positions(p)[:, [skeleton.joint_index(h or f)
                                             for h, f in zip(heels, feet)], 1]
     targets = np.stack([_targets(before[:, i], heel_y[:, i] - before[:, i, 1], stance[:, i],
-                                 ground, settings.blend_frames)
+                                 anchored, ground, settings.blend_frames)
                         for i in range(len(feet))], axis=1)
     rows = range(n, 2 * n) if cyclic and n > 1 else range(n)
     moved = np.linalg.norm(targets - before, axis=2) > 1e-6
@@ -253,8 +262,8 @@ def stance_mask(foot_xyz: np.ndarray, ground_y_m: float, *, animal_speed_m: floa
     return mask
 
 
-def _targets(foot: np.ndarray, heel_rise: np.ndarray, stance: np.ndarray, ground: float,
-             blend: int) -> np.ndarray:
+def _targets(foot: np.ndarray, heel_rise: np.ndarray, stance: np.ndarray,
+             anchored: np.ndarray, ground: float, blend: int) -> np.ndarray:
     """Where the foot should be in each frame: planted in stance, blended near it, and with
     both its end and its heel (``heel_rise`` above the end; the foot keeps its orientation)
     above the ground everywhere."""
@@ -262,7 +271,9 @@ def _targets(foot: np.ndarray, heel_rise: np.ndarray, stance: np.ndarray, ground
     weight = np.zeros(n)
     shift = np.zeros_like(foot)
     for start, stop in _runs(stance):
-        spot = np.array([np.median(foot[start:stop, 0]), ground, np.median(foot[start:stop, 2])])
+        trusted = start + np.flatnonzero(anchored[start:stop])
+        where = foot[trusted] if trusted.size else foot[start:stop]
+        spot = np.array([np.median(where[:, 0]), ground, np.median(where[:, 2])])
         for t in range(max(0, start - blend), min(n, stop + blend)):
             gap = max(start - t, t - (stop - 1), 0)
             w = 1.0 if gap == 0 else _smooth(1.0 - gap / (blend + 1))

@@ -79,6 +79,24 @@ def test_spoiled_legs_are_planted_and_lifted_out_of_the_ground(horse, gait):
     assert "moved up to" in result.summary()
 
 
+def test_a_stance_holding_a_posed_frame_is_planted_where_the_pose_put_the_foot(horse):
+    truth, travel = _in_place(horse, "canter")
+    spoiled = _spoil(horse, truth, seed=5)
+    spoiled[:, horse.channel_index("R_shoulder.rz")] += 5.0  # the foot lands off its true spot
+    toe = horse.joint_index("R_fore_toe")
+    stance = stance_mask("canter", FRAMES)["RF"]
+    key = int(np.flatnonzero(stance)[3])
+    spoiled[key] = truth[key]  # the interpolation is exact at a key
+    result = clean_ground_contact(horse, spoiled, travel_m=travel, anchors=[key])
+    planted = horse.joint_positions(result.poses)[:, toe] + travel
+    spot = horse.joint_positions(truth[key])[toe] + travel[key]
+    run = [t for t in range(key - 2, key + 3) if result.stance[t, 0]]
+    np.testing.assert_allclose(planted[run][:, [0, 2]], np.tile(spot[[0, 2]], (len(run), 1)),
+                               atol=2e-3)
+    free = clean_ground_contact(horse, spoiled, travel_m=travel)
+    assert np.abs(horse.joint_positions(free.poses)[key, toe] + travel[key] - spot)[0] > 2e-3
+
+
 def test_true_motion_is_nearly_untouched(horse):
     """The synthetic hooves are planted in the side view only: as the trunk rolls and yaws
     they slide sideways (up to 2.5 cm a frame). Planting them moves them sideways, little else."""
