@@ -7,10 +7,22 @@ is separate from doing (as SLEAP's command layer does) and tests substitute a sc
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 from pathlib import Path
 
-from PySide6.QtWidgets import QFileDialog, QInputDialog, QMessageBox, QWidget
+from PySide6.QtWidgets import (
+    QCheckBox,
+    QComboBox,
+    QDialog,
+    QDialogButtonBox,
+    QFileDialog,
+    QFormLayout,
+    QInputDialog,
+    QMessageBox,
+    QWidget,
+)
 
+from gaitcore.project.document import AnimationOptions
 from gaitcore.project.storage import SUFFIX
 
 FOOTAGE_FILTER = "Footage (*.mp4 *.mov *.avi *.mkv *.m4v *.webm *.gif);;All files (*)"
@@ -94,6 +106,12 @@ class Asker:
         p = Path(path)
         return p if p.suffix else p.with_suffix(suggested.suffix)
 
+    def export_options(self, title: str, options: AnimationOptions) -> AnimationOptions | None:
+        """The export options, shown with ``options`` filled in (None: cancelled)."""
+        dialog = ExportOptionsDialog(options, self._parent)
+        dialog.setWindowTitle(title)
+        return dialog.options() if dialog.exec() == QDialog.DialogCode.Accepted else None
+
     def confirm(self, title: str, message: str) -> bool:
         """Ask before a change that drops work (it stays undoable); True to go on."""
         answer = QMessageBox.question(self._parent, title, message)
@@ -149,8 +167,56 @@ class HeadlessAsker(Asker):
     def export_path(self, title: str, suggested: Path, file_filter: str) -> Path | None:
         return None
 
+    def export_options(self, title: str, options: AnimationOptions) -> AnimationOptions | None:
+        return options
+
     def confirm(self, title: str, message: str) -> bool:
         return False
 
     def choose_frame(self, title: str, frames: list[int]) -> int | None:
         return None
+
+
+ROOT_CHOICES = (
+    ("auto", "Automatic: in place for a loop, forward for the clip"),
+    ("in-place", "In place (horizontal root motion removed)"),
+    ("forward", "Forward at the clip's mean speed"),
+    ("as-keys", "As interpolated from the keys (jumps back each cycle)"),
+)
+NAMING_CHOICES = (("as-is", "As in the skeleton (L_hip)"), ("rigify", "Blender / Rigify (hip.L)"))
+
+
+class ExportOptionsDialog(QDialog):
+    """Root motion, ground contact, loop and bone names of one export, before the file."""
+
+    def __init__(self, options: AnimationOptions, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self._options = options
+        self.root = QComboBox()
+        for value, label in ROOT_CHOICES:
+            self.root.addItem(label, value)
+        self.root.setCurrentIndex([v for v, _ in ROOT_CHOICES].index(options.root_motion))
+        self.contact = QCheckBox("Feet on the ground (plant stance, lift out of the floor)")
+        self.contact.setChecked(options.ground_contact)
+        self.loop = QCheckBox("One gait cycle that loops")
+        self.loop.setChecked(options.loop)
+        self.names = QComboBox()
+        for value, label in NAMING_CHOICES:
+            self.names.addItem(label, value)
+        self.names.setCurrentIndex([v for v, _ in NAMING_CHOICES].index(options.bone_names))
+        form = QFormLayout(self)
+        form.addRow("Root motion:", self.root)
+        form.addRow("", self.contact)
+        form.addRow("", self.loop)
+        form.addRow("Bone names:", self.names)
+        buttons = QDialogButtonBox(QDialogButtonBox.StandardButton.Ok
+                                   | QDialogButtonBox.StandardButton.Cancel)
+        buttons.accepted.connect(self.accept)
+        buttons.rejected.connect(self.reject)
+        form.addRow(buttons)
+
+    def options(self) -> AnimationOptions:
+        """The options as the controls show them."""
+        return replace(self._options, root_motion=self.root.currentData(),
+                       ground_contact=self.contact.isChecked(), loop=self.loop.isChecked(),
+                       bone_names=self.names.currentData())

@@ -8,6 +8,7 @@ are missing and writes nothing. Files are written off the GUI thread with progre
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +21,7 @@ from app.workers import Job
 from gaitcore.errors import GaitInputError
 from gaitcore.io.export import EXPORTERS, export_animation, write_preview_video
 from gaitcore.io.pose_table import PoseTable
-from gaitcore.project.steps import animate_project, frame_rate, open_source
+from gaitcore.project.steps import Animation, animate_project, frame_rate, open_source
 
 VIDEO = ".mp4"
 KINDS = {".csv": "Curves CSV", ".bvh": "BVH", ".glb": "glTF (.glb)", VIDEO: "Preview video"}
@@ -44,10 +45,18 @@ class ExportController(QObject):
     def export(self, suffix: str, path: Path | None = None) -> Job | None:
         """Export to ``path`` (asked when None) as ``suffix`` (a key of :data:`KINDS`).
 
-        Returns the running job, or None when nothing is written (a message says why).
+        Curves, BVH and glTF first ask for the export options (root motion, ground contact,
+        loop, bone names; saved with the project as one undo step), then write what
+        :meth:`Animation.export_motion` makes of the animation. Returns the running job, or
+        None when nothing is written (a message says why).
         """
         state, asker = self._state, self._documents.asker
         title = f"Export {KINDS[suffix]}"
+        if suffix != VIDEO:
+            options = asker.export_options(title, self._animation.options)
+            if options is None:
+                return None
+            self._animation.set_options(options)
         try:
             animation = animate_project(state.project, state.analysis, state.skeleton,
                                           self._animation.options)
@@ -61,15 +70,14 @@ class ExportController(QObject):
             path = asker.export_path(title, suggested, description)
             if path is None:
                 return None
-        frames, curves = animation.exported()
         skeleton, fps = animation.skeleton, export_fps(state)
         if suffix == VIDEO:
+            curves = animation.exported()[1]
             footage = self._footage_frames(animation)
             job = Job(lambda progress: write_preview_video(path, footage, skeleton, curves, fps,
                                                            progress=progress), title)
         else:
-            table = PoseTable(frames, skeleton.channel_names, curves)
-            job = Job(lambda progress: export_animation(path, skeleton, table, fps), title)
+            job = Job(lambda progress: _write(path, animation, fps, progress), title)
         return self._documents.run(job, lambda result: self._done(path, result), tied=False)
 
     def _footage_frames(self, animation):
@@ -94,5 +102,22 @@ class ExportController(QObject):
 
     def _done(self, asked: Path, result) -> None:
         written = getattr(result, "path", result) or asked
-        note = getattr(result, "note", None)
+        note = getattr(result, "note", None) or getattr(result, "summary", None)
         self._documents.messageRaised.emit(f"exported {written}" + (f" ({note})" if note else ""))
+
+
+@dataclass(frozen=True)
+class Written:
+    """What an export job wrote: the file and a one-line summary of the motion."""
+
+    path: Path
+    summary: str
+
+
+def _write(path: Path, animation: Animation, fps: float, progress) -> Written:
+    """Make the exported motion (ground contact included) and write it: on the job's thread."""
+    motion = animation.export_motion(progress)
+    table = PoseTable(motion.frames, animation.skeleton.channel_names, motion.poses)
+    written = export_animation(path, animation.skeleton, table, fps,
+                               naming=animation.options.bone_names)
+    return Written(written, motion.summary())

@@ -144,6 +144,16 @@ def _add_animate(sub) -> None:
                    help="frame rate of time_s, the BVH frame time and glTF key times (24)")
     p.add_argument("--csv-time", action="store_true",
                    help="add a time_s column (frame / fps) after 'frame' in CURVES.csv")
+    p.add_argument("--loop", action="store_true",
+                   help="write one gait cycle that loops (its last frame leads into its first)")
+    p.add_argument("--root", choices=("in-place", "forward", "as-keys"), default=None,
+                   help="horizontal root motion: held in place, forward at the keys' mean "
+                   "speed, or as interpolated (default: in-place with --loop, else forward)")
+    p.add_argument("--no-ground-contact", action="store_true",
+                   help="leave the feet as interpolated (default: planted through stance and "
+                   "kept above the ground by leg IK; needs --skeleton)")
+    p.add_argument("--bone-names", choices=("as-is", "rigify"), default="as-is",
+                   help="joint names in BVH/glTF: as in the skeleton, or Rigify style (hip.L)")
     p.set_defaults(run=_run_animate)
 
 
@@ -153,6 +163,7 @@ def _run_animate(args: argparse.Namespace) -> int:
     from gaitcore.animation.animate import animate_record
     from gaitcore.io.analysis_file import read_analysis_json
     from gaitcore.io.export import EXPORTERS
+    from gaitcore.io.motion import AUTO, export_motion
     from gaitcore.io.pose_table import PoseTable, pose_matrix, read_pose_table, write_pose_table
 
     exports = [(flag, path) for flag, path in (("bvh", args.bvh), ("glb", args.glb))
@@ -174,19 +185,34 @@ def _run_animate(args: argparse.Namespace) -> int:
     if exports:
         pose_matrix(skeleton, table)  # every channel of the skeleton posed, before any work
     alternates = None if args.no_switching else record.alternate_frames
+    poses = table.as_dict()
     try:
-        curves = animate_record(record, table.as_dict(), alternates=alternates,
-                                filtered=args.filtered, clamp=args.clamp)
+        curves = animate_record(record, poses, alternates=alternates, filtered=args.filtered,
+                                clamp=args.clamp)
     except GaitInputError as exc:
         raise GaitInputError(f"{args.key_poses}: {exc}") from None
-    out_table = PoseTable(np.arange(record.n_frames), table.columns, curves)
+    motion = export_motion(curves, table.columns, key_poses=poses, skeleton=skeleton,
+                           loop=args.loop, period_frames=record.period_frames,
+                           root_motion=args.root or AUTO,
+                           ground_contact=not args.no_ground_contact)
+    out_table = PoseTable(motion.frames, table.columns, motion.poses)
     write_pose_table(args.out, out_table, fps=args.fps if args.csv_time else None)
-    print(f"wrote {args.out} ({record.n_frames} frames, {len(table.columns)} channels)")
+    n = len(motion.frames)
+    print(f"wrote {args.out} ({n} frames, {len(table.columns)} channels): {motion.summary()}")
+    _print_contact(motion.contact)
     for flag, path in exports:  # the flag, not the file's suffix, names the format
-        EXPORTERS[f".{flag}"].write(path, skeleton, out_table, args.fps)
-        print(f"wrote {path} ({skeleton.n_joints} joints, {record.n_frames} frames "
-              f"at {args.fps:g} fps)")
+        EXPORTERS[f".{flag}"].write(path, skeleton, out_table, args.fps, args.bone_names)
+        print(f"wrote {path} ({skeleton.n_joints} joints, {n} frames at {args.fps:g} fps)")
     return 0
+
+
+def _print_contact(contact) -> None:
+    """How far the ground contact clean-up moved each foot, one line per foot."""
+    for foot in contact.feet if contact is not None else ():
+        print(f"  {foot.name}: {foot.stance_frames} frames in stance, moved in "
+              f"{foot.moved_frames} frames by up to {100 * foot.max_shift_m:.1f} cm "
+              f"(mean {100 * foot.mean_shift_m:.1f} cm); lowest {100 * foot.lowest_before_m:.1f}"
+              f" -> {100 * foot.lowest_after_m:.1f} cm")
 
 
 def _int_list(text: str) -> tuple[int, ...]:

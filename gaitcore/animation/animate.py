@@ -43,6 +43,8 @@ class AnalysisRecord:
     key_frames: tuple[int, ...]
     alternate_frames: tuple[int, ...] | None
     alpha: float
+    period_frames: float = float("nan")
+    """Gait period found by the diagnosis (NaN when the file has none): loops are cut at it."""
 
     @classmethod
     def from_analysis(cls, analysis: Analysis) -> AnalysisRecord:
@@ -53,7 +55,7 @@ class AnalysisRecord:
                    tuple(int(f) for f in analysis.key_frames),
                    None if analysis.alternate_frames is None
                    else tuple(int(f) for f in analysis.alternate_frames),
-                   float(analysis.settings.alpha))
+                   float(analysis.settings.alpha), float(analysis.diagnosis.period_frames))
 
 
 def animate_record(

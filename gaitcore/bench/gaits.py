@@ -239,6 +239,22 @@ def generate_gait(skeleton: Skeleton, gait: str, n_frames: int, *,
     return poses
 
 
+def stance_mask(gait: str, n_frames: int, *, period_frames: float | None = None,
+                phase: float = 0.0) -> dict[str, np.ndarray]:
+    """Which hooves are on the ground in each frame (left lead).
+
+    Returns
+    -------
+    dict of str to ndarray of bool, shape (n_frames,)
+        One entry per limb ("LH", "LF", "RH", "RF").
+    """
+    spec = GAITS.get(gait)
+    if spec is None:
+        raise GaitInputError(f"unknown gait {gait!r}; choose one of {', '.join(GAITS)}")
+    t = np.arange(n_frames) / float(period_frames or spec.period_frames) + phase
+    return {limb: (t - spec.footfalls[limb]) % 1.0 < spec.duty_factor for limb in LIMBS}
+
+
 def _harmonics(t: np.ndarray, harmonics: Harmonics) -> np.ndarray:
     out = np.zeros_like(t)
     for k, amp, ph in harmonics:

@@ -105,10 +105,11 @@ def analysis_record_from_dict(data: object, *, where: str = "analysis") -> Analy
         alts = data.get("alternate_frames")
         alts = None if alts is None else tuple(int(f) for f in alts)
         alpha = float(data.get("alpha", np.log(2.0)))
+        period = float(data.get("period_frames") or "nan")
     except (KeyError, TypeError, ValueError) as exc:
         raise GaitInputError(f"{path} is missing or has a malformed field: {exc}") from None
     if proj.ndim != 2 or proj.shape[0] != n or filt.shape != proj.shape or theta.shape != (n,):
         raise GaitInputError(f"{path}: projections do not match n_frames = {n}")
     if not keys or any(not 0 <= f < n for f in keys + (alts or ())):
         raise GaitInputError(f"{path}: key frames must lie in 0..{n - 1}")
-    return AnalysisRecord(n, proj, filt, theta, keys, alts, alpha)
+    return AnalysisRecord(n, proj, filt, theta, keys, alts, alpha, period)

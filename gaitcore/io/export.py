@@ -31,29 +31,34 @@ class Exporter:
     description : str
         For file dialogs ("BVH motion (*.bvh)").
     needs_skeleton : bool
-    write : callable (path, skeleton or None, table, fps) -> None
+    write : callable (path, skeleton or None, table, fps, naming) -> None
+        ``naming`` is the bone naming of :func:`gaitcore.io.bone_names.bone_names` (the CSV
+        keeps channel names as they are).
     """
 
     suffix: str
     description: str
     needs_skeleton: bool
-    write: Callable[[Path, Skeleton | None, PoseTable, float], None]
+    write: Callable[[Path, Skeleton | None, PoseTable, float, str], None]
 
 
-def _write_csv(path: Path, skeleton: Skeleton | None, table: PoseTable, fps: float) -> None:
+def _write_csv(path: Path, skeleton: Skeleton | None, table: PoseTable, fps: float,
+               naming: str) -> None:
     write_pose_table(path, table, fps=fps)
 
 
-def _write_bvh(path: Path, skeleton: Skeleton | None, table: PoseTable, fps: float) -> None:
+def _write_bvh(path: Path, skeleton: Skeleton | None, table: PoseTable, fps: float,
+               naming: str) -> None:
     from gaitcore.io.bvh.writer import write_bvh
 
-    write_bvh(path, skeleton, table, fps=fps)
+    write_bvh(path, skeleton, table, fps=fps, naming=naming)
 
 
-def _write_glb(path: Path, skeleton: Skeleton | None, table: PoseTable, fps: float) -> None:
+def _write_glb(path: Path, skeleton: Skeleton | None, table: PoseTable, fps: float,
+               naming: str) -> None:
     from gaitcore.io.gltf import write_glb
 
-    write_glb(path, skeleton, pose_matrix(skeleton, table), fps)
+    write_glb(path, skeleton, pose_matrix(skeleton, table), fps, naming=naming)
 
 
 EXPORTERS: dict[str, Exporter] = {
@@ -66,7 +71,7 @@ EXPORTERS: dict[str, Exporter] = {
 
 
 def export_animation(path: str | Path, skeleton: Skeleton | None, table: PoseTable,
-                     fps: float = 24.0) -> Path:
+                     fps: float = 24.0, *, naming: str = "as-is") -> Path:
     """Write animation curves in the format named by the suffix of ``path``.
 
     Parameters
@@ -80,6 +85,8 @@ def export_animation(path: str | Path, skeleton: Skeleton | None, table: PoseTab
         ignored by the skeletal formats).
     fps : float
         Frame rate: ``time_s = frame / fps`` in CSV, BVH frame time and glTF key times.
+    naming : {"as-is", "rigify"}
+        Bone names in BVH and glTF (:func:`gaitcore.io.bone_names.bone_names`).
 
     Returns
     -------
@@ -103,7 +110,7 @@ def export_animation(path: str | Path, skeleton: Skeleton | None, table: PoseTab
                              "give one (a skeleton .json or .bvh file)")
     if not (np.isfinite(fps) and fps > 0):
         raise GaitInputError(f"frame rate must be a positive number, got {fps}")
-    exporter.write(path, skeleton, table, float(fps))
+    exporter.write(path, skeleton, table, float(fps), naming)
     return path
 
 

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+from gaitcore.io.bone_names import bone_names
 from gaitcore.rig.rotations import quaternions_zxy
 from gaitcore.rig.skeleton import CHANNEL_ORDER, Skeleton
 
@@ -34,7 +35,7 @@ GENERATOR = "Gait Studio (gaitcore.io.gltf)"
 
 
 def write_glb(path: str | Path, skeleton: Skeleton, poses: np.ndarray, fps: float = 24.0, *,
-              subdivisions: int = 2) -> None:
+              subdivisions: int = 2, naming: str = "as-is") -> None:
     """Write an animated, skinned skeleton as a binary glTF file.
 
     Parameters
@@ -48,6 +49,8 @@ def write_glb(path: str | Path, skeleton: Skeleton, poses: np.ndarray, fps: floa
         Frame rate: frame f is keyed at ``f / fps`` seconds.
     subdivisions : int
         Icosphere subdivisions per bone ellipsoid (2 = 162 vertices, 320 triangles).
+    naming : {"as-is", "rigify"}
+        Node names as in the skeleton or Rigify style (:func:`gaitcore.io.bone_names.bone_names`).
 
     Raises
     ------
@@ -77,9 +80,9 @@ def write_glb(path: str | Path, skeleton: Skeleton, poses: np.ndarray, fps: floa
 
     gltf = _Document()
     rest_world = skeleton.joint_positions(skeleton.rest_pose())
-    nodes = []
-    for j, joint in enumerate(skeleton.joints):
-        node = {"name": joint.name, "translation": [float(v) for v in joint.offset]}
+    nodes: list[dict[str, object]] = []
+    for j, (joint, name) in enumerate(zip(skeleton.joints, bone_names(skeleton, naming))):
+        node = {"name": name, "translation": [float(v) for v in joint.offset]}
         kids = [int(c) for c in np.flatnonzero(skeleton.parents == j)]
         if kids:
             node["children"] = kids

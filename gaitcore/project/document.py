@@ -22,7 +22,10 @@ from types import MappingProxyType
 import numpy as np
 
 from gaitcore.analysis.analyze import AnalysisSettings
+from gaitcore.animation.root_motion import ROOT_MODES
 from gaitcore.errors import GaitInputError
+from gaitcore.io.bone_names import BONE_NAMINGS
+from gaitcore.io.motion import AUTO
 from gaitcore.rig.skeleton import Skeleton
 from gaitcore.silhouettes.annotations import Rect, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
@@ -101,11 +104,34 @@ class AnimationOptions:
         Clamp the RBF weights to [0, 1] (paper 2.4).
     loop : bool
         Play and export one gait cycle, cut at the detected period and closed on itself.
+    root_motion : {"auto", "in-place", "forward", "as-keys"}
+        Horizontal root motion of the exports (:func:`gaitcore.io.motion.export_motion`);
+        ``auto`` is in place for a loop, forward for the whole clip.
+    ground_contact : bool
+        Plant the feet through stance and keep them above the ground in the exports.
+    bone_names : {"as-is", "rigify"}
+        Joint names in BVH and glTF exports (``rigify``: ``hip.L``).
+
+    Raises
+    ------
+    GaitInputError
+        An unknown root motion or bone naming.
     """
 
     filtered: bool = False
     clamp: bool = False
     loop: bool = False
+    root_motion: str = AUTO
+    ground_contact: bool = True
+    bone_names: str = "as-is"
+
+    def __post_init__(self) -> None:
+        if self.root_motion not in (AUTO, *ROOT_MODES):
+            raise GaitInputError(f"unknown root motion {self.root_motion!r}; use one of "
+                                 f"{', '.join((AUTO, *ROOT_MODES))}")
+        if self.bone_names not in BONE_NAMINGS:
+            raise GaitInputError(f"unknown bone naming {self.bone_names!r}; use one of "
+                                 f"{', '.join(BONE_NAMINGS)}")
 
 
 @dataclass(frozen=True)

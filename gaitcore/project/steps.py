@@ -11,7 +11,7 @@ in a dialog and in a terminal alike.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +23,7 @@ from gaitcore.errors import GaitInputError
 from gaitcore.footage.image_folder import iter_mask_folder
 from gaitcore.footage.sources import DEFAULT_FPS, FrameSource, open_frames
 from gaitcore.io.bvh.reader import read_bvh
+from gaitcore.io.motion import ExportMotion, export_motion
 from gaitcore.progress import Progress
 from gaitcore.project.document import AnimationOptions, Project, Silhouettes
 from gaitcore.rig.skeleton import Skeleton
@@ -166,6 +167,10 @@ class Animation:
         First clip frame of the loop cycle (0 without ``options.loop``).
     cycle : ndarray of shape (P, k) or None
         The loop cycle when ``options.loop``.
+    key_poses : dict of int to ndarray of shape (k,)
+        The posed frames animated from (their root positions give the export's speed).
+    period_frames : float
+        Gait period the loop is cut at.
     """
 
     curves: np.ndarray
@@ -174,12 +179,24 @@ class Animation:
     skeleton: Skeleton
     cycle_start: int = 0
     cycle: np.ndarray | None = None
+    key_poses: dict[int, np.ndarray] = field(default_factory=dict)
+    period_frames: float = float("nan")
 
     def pose_at(self, frame: int) -> np.ndarray:
         """The pose shown at clip frame ``frame`` (the loop repeats in step with the clip)."""
         if self.cycle is not None:
             return self.cycle[(frame - self.cycle_start) % len(self.cycle)]
         return self.curves[min(max(frame, 0), len(self.curves) - 1)]
+
+    def export_motion(self, progress: Progress | None = None) -> ExportMotion:
+        """The motion the exporters write, as ``gaitcore animate`` makes it: loop or clip,
+        root motion and ground contact of :attr:`options` (seconds on long clips: run it off
+        the GUI thread)."""
+        return export_motion(self.curves, self.skeleton.channel_names, key_poses=self.key_poses,
+                             skeleton=self.skeleton, loop=self.options.loop,
+                             period_frames=self.period_frames,
+                             root_motion=self.options.root_motion,
+                             ground_contact=self.options.ground_contact, progress=progress)
 
     def exported(self) -> tuple[np.ndarray, np.ndarray]:
         """Frame numbers and poses to export: every clip frame, or the cycle from 0."""
@@ -218,4 +235,5 @@ def animate_project(project: Project, analysis: Analysis | None, skeleton: Skele
     start, cycle = 0, None
     if options.loop:
         start, cycle = loop_cycle(curves, analysis.diagnosis.period_frames)
-    return Animation(curves, weights, options, skeleton, start, cycle)
+    return Animation(curves, weights, options, skeleton, start, cycle, poses,
+                     float(analysis.diagnosis.period_frames))

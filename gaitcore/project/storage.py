@@ -190,15 +190,17 @@ def _options(cls: type, entry: object, what: str):
     """A small options dataclass (``cls``) from its JSON object.
 
     Fields absent from ``entry`` keep their defaults (projects saved before they existed);
-    each present one must have the type of its default (true/false, or a number).
+    each present one must have the type of its default (true/false, a number, or a string).
     """
     if not isinstance(entry, dict):
         raise TypeError(f"{what} must be an object, got {entry!r}")
     defaults, values = cls(), {}
     for name in cls.__dataclass_fields__.keys() & entry.keys():
-        value, flag = entry[name], isinstance(getattr(defaults, name), bool)
-        if isinstance(value, bool) != flag or not isinstance(value, (bool, int, float)):
-            kind = "true or false" if flag else "a number"
+        value, default = entry[name], getattr(defaults, name)
+        flag, text = isinstance(default, bool), isinstance(default, str)
+        if isinstance(value, bool) != flag or isinstance(value, str) != text or \
+                not isinstance(value, (bool, int, float, str)):
+            kind = "true or false" if flag else "a string" if text else "a number"
             raise TypeError(f"{what}: {name} must be {kind}, got {value!r}")
         values[name] = value
     try:

@@ -63,6 +63,7 @@ class ScriptedAsker(Asker):
         self.recover_answer = True
         self.next_open_file: Path | None = None
         self.next_export_path: Path | None = None
+        self.export_answer = "keep"  # or an AnimationOptions, or None to cancel
         self.confirm_answer = True
         self.chosen_frame: int | None = None
         self.asked: list[str] = []
@@ -96,6 +97,10 @@ class ScriptedAsker(Asker):
     def export_path(self, title: str, suggested: Path, file_filter: str) -> Path | None:
         self.asked.append(title)
         return self.next_export_path
+
+    def export_options(self, title: str, options):
+        self.asked.append(f"{title}: options")
+        return options if self.export_answer == "keep" else self.export_answer
 
     def confirm(self, title: str, message: str) -> bool:
         self.asked.append(f"{title}: {message}")

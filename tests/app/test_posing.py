@@ -2,15 +2,22 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+from pathlib import Path
+
 import numpy as np
 import pytest
 
+from app.dialogs import ExportOptionsDialog
 from app.export import export_fps
 from gaitcore import cli
 from gaitcore.io.analysis_file import write_analysis_json
 from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.pose_table import PoseTable, read_pose_table, write_pose_table
+from gaitcore.project.document import AnimationOptions
 from tests.app.posing_helpers import open_demo, pose_with_spin_boxes, true_poses
+
+ARTIFACTS = Path(__file__).resolve().parents[1] / "_artifacts"
 
 
 def run_gaitcore_animate(window, folder, *, extra=()):
@@ -29,8 +36,10 @@ def run_gaitcore_animate(window, folder, *, extra=()):
                       np.array([state.project.key_poses[f] for f in frames]))
     write_pose_table(folder / "keys.csv", table)
     out = folder / "cli.csv"
+    state.skeleton.to_json(folder / "skeleton.json")  # for the ground contact clean-up
     args = ["animate", str(folder / "analysis.json"), "--key-poses", str(folder / "keys.csv"),
-            "--out", str(out), "--csv-time", "--fps", repr(export_fps(state)), *extra]
+            "--out", str(out), "--csv-time", "--fps", repr(export_fps(state)),
+            "--skeleton", str(folder / "skeleton.json"), *extra]
     assert cli.main(args) == 0
     return out
 
@@ -95,7 +104,9 @@ def test_filtered_and_clamped_options_match_the_command_line_too(qtbot, window, 
     period = round(window.state.analysis.diagnosis.period_frames)
     assert animation.cycle.shape == (period, window.state.skeleton.n_channels)
     loop_csv = export_from_app(qtbot, window, asker, tmp_path / "loop.csv")
-    assert len(read_pose_table(loop_csv).frames) == period
+    loop = read_pose_table(loop_csv)
+    assert len(loop.frames) == period + 1  # the closing frame, equal to the first
+    np.testing.assert_array_equal(loop.values[-1, 1:], loop.values[0, 1:])
 
     # each option change is one undo step, and undo unticks its box
     window.state.undo_stack.undo()
@@ -181,6 +192,45 @@ def test_walk_alternates_are_posed_as_mirrors_and_drive_switching(qtbot, window,
     assert weights.weights.shape == (100, 2 * len(keys)) and weights.states is not None
     app_csv = export_from_app(qtbot, window, asker, tmp_path / "app.csv")
     assert app_csv.read_bytes() == run_gaitcore_animate(window, tmp_path).read_bytes()
+
+
+def test_export_options_are_asked_saved_and_undoable(qtbot, window, asker, canter_clip,
+                                                       tmp_path):
+    open_demo(qtbot, window, canter_clip)
+    truth = true_poses(window.state.skeleton)
+    for k in window.state.analysis.key_frames:
+        window.state.set_frame(k)
+        window.posing.set_pose(truth[k], "set pose")
+    chosen = replace(window.animator.options, root_motion="in-place", ground_contact=False,
+                     bone_names="rigify")
+    asker.export_answer = chosen
+    export_from_app(qtbot, window, asker, tmp_path / "still.bvh", ".bvh")
+    assert window.state.project.animation == chosen
+    assert "Export BVH: options" in asker.asked
+    text = (tmp_path / "still.bvh").read_text()
+    assert "JOINT hip.L" in text
+    _, table, _ = read_bvh(tmp_path / "still.bvh")
+    tx = table.values[:, table.columns.index("root.tx")]
+    assert np.all(tx == tx[0])
+    window.state.undo_stack.undo()
+    assert window.state.project.animation.root_motion == "auto"
+    asker.export_answer = None  # cancelled: nothing asked after, nothing written
+    assert window.exporter.export(".csv", tmp_path / "never.csv") is None
+    assert not (tmp_path / "never.csv").exists()
+
+
+def test_export_options_dialog_shows_and_returns_the_options(qtbot):
+    options = AnimationOptions(loop=True, root_motion="forward", bone_names="rigify")
+    dialog = ExportOptionsDialog(options)
+    qtbot.addWidget(dialog)
+    dialog.show()
+    qtbot.waitExposed(dialog)
+    assert dialog.options() == options
+    dialog.contact.setChecked(False)
+    dialog.root.setCurrentIndex(1)
+    assert dialog.options() == replace(options, ground_contact=False, root_motion="in-place")
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    dialog.grab().save(str(ARTIFACTS / "export_options.png"))
 
 
 def test_exporting_before_every_key_is_posed_says_which_are_missing(qtbot, window, asker,

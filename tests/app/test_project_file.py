@@ -181,14 +181,31 @@ def test_the_posed_skeleton_and_poses_survive_a_round_trip(tmp_path):
 def test_animation_options_default_for_older_files_and_are_checked(tmp_path):
     save_project(Project(), tmp_path / "p.gaitproj")
     doc = json.loads((tmp_path / "p.gaitproj").read_text())
-    assert doc["animation"] == {"filtered": False, "clamp": False, "loop": False}
+    assert doc["animation"] == {"filtered": False, "clamp": False, "loop": False,
+                                "root_motion": "auto", "ground_contact": True,
+                                "bone_names": "as-is"}
     del doc["animation"]  # saved before the options were kept
     (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
     assert load_project(tmp_path / "p.gaitproj").animation == AnimationOptions()
-    doc["animation"] = {"loop": "yes"}
+    doc["animation"] = {"filtered": True, "clamp": False, "loop": True}  # before export options
     (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
-    with pytest.raises(GaitInputError, match="damaged"):
-        load_project(tmp_path / "p.gaitproj")
+    assert load_project(tmp_path / "p.gaitproj").animation == AnimationOptions(filtered=True,
+                                                                              loop=True)
+    for bad in ({"loop": "yes"}, {"root_motion": "sideways"}, {"root_motion": 1},
+                {"bone_names": True}):
+        doc["animation"] = bad
+        (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
+        with pytest.raises(GaitInputError, match="damaged"):
+            load_project(tmp_path / "p.gaitproj")
+
+
+def test_export_options_are_saved(tmp_path):
+    options = AnimationOptions(loop=True, root_motion="forward", ground_contact=False,
+                               bone_names="rigify")
+    save_project(Project(animation=options), tmp_path / "p.gaitproj")
+    assert load_project(tmp_path / "p.gaitproj").animation == options
+    with pytest.raises(GaitInputError, match="root motion"):
+        AnimationOptions(root_motion="backwards")
 
 
 @pytest.mark.parametrize("entry", [{"scale": -1.0}, {"scale": "big"}, {"flip": 1}, [1, 2],

@@ -67,3 +67,48 @@ def test_missing_channels_are_refused(tmp_path):
     table = PoseTable(np.arange(2), ("root.tx",), np.zeros((2, 1)))
     with pytest.raises(GaitInputError, match="lack"):
         write_bvh(tmp_path / "x.bvh", skel, table)
+
+
+def _hierarchy(path):
+    text = path.read_text()
+    return text[:text.index("MOTION")], text
+
+
+def test_one_end_site_per_joint_the_farthest(tmp_path):
+    skel = load_template("horse")
+    table = PoseTable(np.arange(2), skel.channel_names, np.zeros((2, skel.n_channels)))
+    write_bvh(tmp_path / "h.bvh", skel, table)
+    hierarchy, _ = _hierarchy(tmp_path / "h.bvh")
+    start = hierarchy.index("JOINT head\n")
+    depth, end = 0, hierarchy.index("{", start)
+    for end in range(end, len(hierarchy)):  # the head's block, to its closing brace
+        depth += {"{": 1, "}": -1}.get(hierarchy[end], 0)
+        if depth == 0:
+            break
+    head = hierarchy[start:end]
+    assert head.count("End Site") == 1
+    muzzle = " ".join(f"{v:.6f}" for v in skel.joints[skel.joint_index("head_end")].offset)
+    assert f"End Site\n{' ' * 16}{{\n{' ' * 18}OFFSET {muzzle}" in head
+    assert "JOINT ears" in head and "CHANNELS 0" in head
+    leaves = [j for j in skel.joints if not j.channels]
+    assert hierarchy.count("End Site") == len(leaves) - 1  # the ears became a joint
+
+
+def test_frame_time_has_ten_significant_digits(tmp_path):
+    skel = load_template("horse")
+    table = PoseTable(np.arange(2), skel.channel_names, np.zeros((2, skel.n_channels)))
+    write_bvh(tmp_path / "h.bvh", skel, table, fps=24.0)
+    _, text = _hierarchy(tmp_path / "h.bvh")
+    assert "Frame Time: 0.04166666667\n" in text
+    assert abs(1 / float("0.04166666667") - 24.0) < 1e-8  # Blender's fps_base stays 1.0
+
+
+def test_rigify_names(tmp_path):
+    skel = load_template("horse")
+    table = PoseTable(np.arange(2), skel.channel_names, np.zeros((2, skel.n_channels)))
+    write_bvh(tmp_path / "h.bvh", skel, table, naming="rigify")
+    hierarchy, _ = _hierarchy(tmp_path / "h.bvh")
+    assert "JOINT hip.L" in hierarchy and "JOINT fore_fetlock.R" in hierarchy
+    assert "L_hip" not in hierarchy and "JOINT spine1" in hierarchy
+    with pytest.raises(GaitInputError, match="naming"):
+        write_bvh(tmp_path / "x.bvh", skel, table, naming="maya")

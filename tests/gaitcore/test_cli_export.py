@@ -25,7 +25,7 @@ from tests.gaitcore.walker import walker_clip, write_mask_folder
 
 bvhio = pytest.importorskip("bvhio")
 HORSE = load_template("horse")
-N_FRAMES = 30
+N_FRAMES = 60  # two canter cycles: enough to cut a loop
 
 
 def _error_line(capsys) -> str:
@@ -68,7 +68,7 @@ def test_animate_exports_bvh_and_glb(canter, tmp_path):
     assert main(["animate", str(canter["analysis"]), "--key-poses", str(canter["key_poses"]),
                  "--out", str(out), "--bvh", str(tmp_path / "a.bvh"),
                  "--glb", str(tmp_path / "a.glb"), "--skeleton", str(canter["skeleton"]),
-                 "--fps", "30"]) == 0
+                 "--fps", "30", "--root", "as-keys", "--no-ground-contact"]) == 0
     # The contract of the README: CURVES.csv has exactly the columns of KEYS.csv.
     header = out.read_text().splitlines()[0]
     assert header == canter["key_poses"].read_text().splitlines()[0]
@@ -83,7 +83,7 @@ def test_animate_exports_bvh_and_glb(canter, tmp_path):
         names.append(j.Name)
         stack.extend(j.Children)
     assert {j.name for j in HORSE.joints if j.channels} <= set(names)
-    # ... and by ours: at the key frames the animation is the true pose.
+    # ... and by ours: at the key frames the raw interpolation is the true pose.
     skel, table, fps = read_bvh(tmp_path / "a.bvh")
     assert fps == 30.0 and len(table.frames) == N_FRAMES
     keys = canter["keys"]
@@ -122,6 +122,43 @@ def test_csv_time_column_and_a_bvh_skeleton(canter, tmp_path):
     doc = _glb_json(tmp_path / "b.glb")
     assert len(doc["skins"][0]["joints"]) == HORSE.n_joints
     assert len(doc["meshes"][0]["primitives"]) == 1  # default bone shapes for a BVH rig
+
+
+@pytest.mark.gl
+def test_defaults_go_forward_with_feet_on_the_ground(canter, tmp_path, capsys):
+    assert main(["animate", str(canter["analysis"]), "--key-poses", str(canter["key_poses"]),
+                 "--out", str(tmp_path / "c.csv"), "--bvh", str(tmp_path / "a.bvh"),
+                 "--skeleton", str(canter["skeleton"])]) == 0
+    out = capsys.readouterr().out
+    assert "root forward" in out and "feet planted" in out and "L_fore_toe:" in out
+    skel, table, _ = read_bvh(tmp_path / "a.bvh")
+    world = skel.joint_positions(table.values)
+    assert np.diff(world[:, 0, 0]).min() > 0  # the root never steps back
+    steps = np.diff(world[:, 0, 0])
+    assert np.ptp(steps) < 1e-5  # constant speed (to the BVH's 6 decimals)
+    feet = [skel.joint_index(f"{s}_{leg}_hoof_end") for s in "LR" for leg in ("fore", "hind")]
+    assert world[:, feet, 1].min() > -0.005
+
+
+@pytest.mark.gl
+def test_a_loop_closes_on_itself_in_every_format(canter, tmp_path):
+    assert main(["animate", str(canter["analysis"]), "--key-poses", str(canter["key_poses"]),
+                 "--out", str(tmp_path / "c.csv"), "--bvh", str(tmp_path / "a.bvh"),
+                 "--glb", str(tmp_path / "a.glb"), "--skeleton", str(canter["skeleton"]),
+                 "--loop", "--bone-names", "rigify"]) == 0
+    period = round(json.loads(canter["analysis"].read_text())["period_frames"])
+    curves = read_pose_table(tmp_path / "c.csv")
+    assert len(curves.frames) == period + 1
+    np.testing.assert_allclose(curves.values[-1], curves.values[0], atol=1e-12)
+    _, table, _ = read_bvh(tmp_path / "a.bvh")
+    assert len(table.frames) == period + 1
+    np.testing.assert_allclose(table.values[-1], table.values[0], atol=1e-6)
+    tx = table.values[:, table.columns.index("root.tx")]
+    assert np.all(tx == tx[0])  # in place: no horizontal root motion at all
+    doc = _glb_json(tmp_path / "a.glb")
+    times = doc["accessors"][doc["animations"][0]["samplers"][0]["input"]]
+    assert times["count"] == period + 1 and times["max"][0] == pytest.approx(period / 24)
+    assert {n["name"] for n in doc["nodes"]} >= {"hip.L", "fore_toe.R", "spine1"}
 
 
 # ---------------------------------------------------------------- bad input (no OpenGL)

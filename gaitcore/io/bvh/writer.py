@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+from gaitcore.io.bone_names import bone_names
 from gaitcore.io.pose_table import PoseTable, pose_matrix
 from gaitcore.rig.skeleton import Skeleton
 
@@ -24,7 +25,8 @@ _BVH_CHANNEL = {
 }
 
 
-def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: float = 24.0) -> None:
+def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: float = 24.0,
+              naming: str = "as-is") -> None:
     """Write the poses of ``table`` on ``skeleton`` as a BVH file.
 
     Parameters
@@ -35,20 +37,34 @@ def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: fl
         One row per frame, with a column for every channel of the skeleton (extra columns
         are ignored).
     fps : float
-        Frame rate written as ``Frame Time: 1/fps``.
+        Frame rate, written as ``Frame Time: 1/fps`` to 10 significant digits (Blender reads
+        24 fps back as exactly 24, not 23.999997).
+    naming : {"as-is", "rigify"}
+        Joint names as in the skeleton, or with ``.L``/``.R`` suffixes
+        (:func:`gaitcore.io.bone_names.bone_names`).
 
     Raises
     ------
     GaitInputError
-        When the table lacks some of the skeleton's channels.
+        When the table lacks some of the skeleton's channels, or the frame rate is not
+        positive.
+
+    Notes
+    -----
+    A joint has at most one End Site: BVH readers (Blender's among them) keep one end point
+    per joint and point the bone at it. Of several end points of one joint, the farthest
+    (the muzzle, not the ears) is the End Site and the others are written as joints with
+    ``CHANNELS 0``, so no point is lost and the bone points along the limb.
     """
     values = pose_matrix(skeleton, table)
     channel = {c: i for i, c in enumerate(skeleton.channel_names)}
     if not fps > 0:
         raise GaitInputError(f"frame rate must be positive, got {fps}")
+    names = bone_names(skeleton, naming)
     children: dict[str, list[int]] = {}
     for i, j in enumerate(skeleton.joints):
         children.setdefault(j.parent or "", []).append(i)
+    end_sites = _end_sites(skeleton, children)
     lines = ["HIERARCHY"]
     columns: list[np.ndarray] = []
 
@@ -56,18 +72,15 @@ def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: fl
         j = skeleton.joints[i]
         pad = "  " * depth
         kids = children.get(j.name, [])
-        if not j.channels and not kids:
-            lines.append(f"{pad}End Site")
-            lines.append(f"{pad}{{")
-            lines.append(f"{pad}  OFFSET {_fmt(j.offset)}")
-            lines.append(f"{pad}}}")
+        if i in end_sites:
+            lines.extend([f"{pad}End Site", f"{pad}{{", f"{pad}  OFFSET {_fmt(j.offset)}",
+                          f"{pad}}}"])
             return
         head = "ROOT" if j.parent is None else "JOINT"
-        lines.append(f"{pad}{head} {j.name}")
-        lines.append(f"{pad}{{")
-        lines.append(f"{pad}  OFFSET {_fmt(j.offset)}")
-        channels = j.channels or ("rz", "rx", "ry")
-        lines.append(f"{pad}  CHANNELS {len(channels)} " + " ".join(_BVH_CHANNEL[c] for c in channels))
+        lines.extend([f"{pad}{head} {names[i]}", f"{pad}{{", f"{pad}  OFFSET {_fmt(j.offset)}"])
+        channels = j.channels or (("rz", "rx", "ry") if kids else ())
+        lines.append(" ".join([f"{pad}  CHANNELS {len(channels)}"]
+                              + [_BVH_CHANNEL[c] for c in channels]))
         for c in channels:
             name = f"{j.name}.{c}"
             col = values[:, channel[name]] if name in channel else np.zeros(len(table.frames))
@@ -79,18 +92,28 @@ def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: fl
         lines.append(f"{pad}}}")
 
     emit(children[""][0], 0)
-    lines.append("MOTION")
-    lines.append(f"Frames: {len(table.frames)}")
-    lines.append(f"Frame Time: {1.0 / fps:.8f}")
     motion = np.column_stack(columns) if columns else np.zeros((len(table.frames), 0))
+    _write(Path(path), lines, motion, fps)
+
+
+def _write(path: Path, hierarchy: list[str], motion: np.ndarray, fps: float) -> None:
+    """The file: the HIERARCHY lines, then MOTION with one line per frame."""
+    lines = hierarchy + ["MOTION", f"Frames: {len(motion)}", f"Frame Time: {1.0 / fps:.10g}"]
     lines.extend(" ".join(f"{v:.6f}" for v in row) for row in motion)
-    path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
+def _end_sites(skeleton: Skeleton, children: dict[str, list[int]]) -> set[int]:
+    """The one end point per joint written as its End Site: the farthest channel-less leaf."""
+    chosen = set()
+    for parent, kids in children.items():
+        leaves = [k for k in kids if parent and not skeleton.joints[k].channels
+                  and not children.get(skeleton.joints[k].name)]
+        if leaves:
+            chosen.add(max(leaves, key=lambda k: np.linalg.norm(skeleton.offsets[k])))
+    return chosen
+
+
 def _fmt(v) -> str:
     return " ".join(f"{float(x):.6f}" for x in v)
-
-
-# ====================================================================== reading

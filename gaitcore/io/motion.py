@@ -1,0 +1,182 @@
+"""The motion written to files: a loop or the whole clip, its root motion, its feet on the ground.
+
+:func:`export_motion` is the one step between the interpolated curves and every exporter,
+called by ``gaitcore animate`` and by the app's Export menu alike:
+
+1. the horizontal root is taken out (:func:`gaitcore.animation.root_motion.apply_root_motion`)
+   so that a loop can be cut without dragging the travel into the mismatch it spreads;
+2. one loop is cut (:func:`gaitcore.animation.weights.loop_cycle`) when asked;
+3. the feet are planted (:func:`gaitcore.rig.contact.clean_ground_contact`) as the animal
+   travels at the keys' speed, across the loop's seam when it is a loop, where the posed
+   frames put them when a stance holds one;
+4. the root motion asked for goes back in: in place, forward at constant speed, or as the
+   keys interpolate it;
+5. a loop gets a closing frame equal to its first (moved on by one stride when it goes
+   forward), so that every format plays it round without a hitch: a glTF player blends the
+   last key into the first, Blender's Cycles modifier repeats from the last key.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from gaitcore.animation.root_motion import (
+    ROOT_MODES,
+    apply_root_motion,
+    horizontal_root_channels,
+    key_velocity,
+)
+from gaitcore.animation.weights import loop_cycle
+from gaitcore.errors import GaitInputError
+from gaitcore.progress import Progress
+from gaitcore.rig.contact import ContactResult, clean_ground_contact, find_feet
+from gaitcore.rig.skeleton import Skeleton
+
+AUTO = "auto"
+"""Root motion by what is exported: in place for one loop, forward for the whole clip."""
+
+
+@dataclass(frozen=True, eq=False)
+class ExportMotion:
+    """Poses ready to write, and what was done to them.
+
+    Attributes
+    ----------
+    frames : ndarray of int, shape (n,)
+        Frame numbers to write: 0..n-1 (a loop's closing frame included).
+    poses : ndarray of shape (n, k)
+    root_motion : str
+        The mode applied (``auto`` resolved).
+    cycle_start : int or None
+        First clip frame of the loop, None for the whole clip.
+    contact : ContactResult or None
+        The ground contact clean-up, None when it was off or there was no skeleton or feet.
+    """
+
+    frames: np.ndarray
+    poses: np.ndarray
+    root_motion: str
+    cycle_start: int | None = None
+    contact: ContactResult | None = None
+
+    def summary(self) -> str:
+        """One line for a status bar or the command's output."""
+        what = (f"loop of {len(self.frames) - 1} frames (+1 closing) from frame "
+                f"{self.cycle_start}" if self.cycle_start is not None
+                else f"{len(self.frames)} frames")
+        contact = self.contact.summary() if self.contact is not None else "ground contact off"
+        return f"{what}, root {self.root_motion}, {contact}"
+
+
+def export_motion(curves: np.ndarray, channel_names: Sequence[str], *,
+                  key_poses: Mapping[int, np.ndarray], skeleton: Skeleton | None = None,
+                  loop: bool = False, period_frames: float | None = None,
+                  root_motion: str = AUTO, ground_contact: bool = True,
+                  progress: Progress | None = None) -> ExportMotion:
+    """Turn interpolated curves into the motion to export.
+
+    Parameters
+    ----------
+    curves : ndarray of shape (n, k)
+        A pose per clip frame, columns ``channel_names``.
+    channel_names : sequence of str
+    key_poses : mapping of int to ndarray of shape (k,)
+        The posed frames (same columns): their root positions give the speed.
+    skeleton : Skeleton, optional
+        Needed for the ground contact clean-up; each of its channels must be a column.
+    loop : bool
+        Export one gait cycle that loops, cut at ``period_frames``.
+    period_frames : float, optional
+        Gait period, required with ``loop``.
+    root_motion : {"auto", "in-place", "forward", "as-keys"}
+    ground_contact : bool
+        Plant the feet (needs ``skeleton``).
+    progress : callable (done, total) -> bool, optional
+        Reports the ground contact clean-up; returning False cancels.
+
+    Returns
+    -------
+    ExportMotion
+
+    Raises
+    ------
+    GaitInputError
+        Unknown root motion, a loop without a usable period or too short a clip, forward
+        motion with fewer than two posed frames, curves without a channel of the skeleton.
+    """
+    names = tuple(channel_names)
+    mode = _check(names, skeleton, root_motion, loop)
+    x = np.asarray(curves, dtype=float)
+    still = apply_root_motion(x, names, "in-place", key_poses=key_poses)
+    start = None
+    frames = np.arange(len(x))
+    if loop:
+        start, still = loop_cycle(still, float("nan") if period_frames is None else period_frames)
+        frames = np.arange(start, start + len(still))
+    contact = None
+    if ground_contact and skeleton is not None and find_feet(skeleton):
+        columns = [names.index(c) for c in skeleton.channel_names]
+        contact = clean_ground_contact(skeleton, still[:, columns], cyclic=loop,
+                                       travel_m=_travel(names, key_poses, frames),
+                                       anchors=[int(f) - frames[0] for f in key_poses
+                                                if frames[0] <= f <= frames[-1]],
+                                       progress=progress)
+        still = still.copy()
+        still[:, columns] = contact.poses
+    poses = _with_root(still, x, names, mode, key_poses, frames)
+    if loop:
+        closing = poses[:1].copy()
+        closing[0, horizontal_root_channels(names)] += _stride(names, key_poses, len(still), mode)
+        poses = np.concatenate([poses, closing])
+    return ExportMotion(np.arange(len(poses)), poses, mode, start, contact)
+
+
+def _check(names: tuple[str, ...], skeleton: Skeleton | None, root_motion: str,
+           loop: bool) -> str:
+    """The root motion to apply (``auto`` resolved), after checking the request."""
+    if root_motion not in (AUTO, *ROOT_MODES):
+        raise GaitInputError(f"unknown root motion {root_motion!r}; use one of "
+                             f"{', '.join((AUTO, *ROOT_MODES))}")
+    missing = [] if skeleton is None else sorted(set(skeleton.channel_names) - set(names))
+    if missing:
+        raise GaitInputError(f"the curves lack {len(missing)} channel(s) of skeleton "
+                             f"{skeleton.name!r} (e.g. {missing[0]}); pose every channel")
+    return ("in-place" if loop else "forward") if root_motion == AUTO else root_motion
+
+
+def _with_root(poses: np.ndarray, curves: np.ndarray, names: tuple[str, ...], mode: str,
+               key_poses: Mapping[int, np.ndarray], frames: np.ndarray) -> np.ndarray:
+    """``poses`` with the horizontal root of ``mode`` (``as-keys``: the interpolated one)."""
+    if mode != "as-keys":
+        return apply_root_motion(poses, names, mode, key_poses=key_poses, frames=frames)
+    out = poses.copy()
+    channels = horizontal_root_channels(names)
+    out[:, channels] = curves[frames][:, channels]
+    return out
+
+
+def _velocity(names: tuple[str, ...], key_poses: Mapping[int, np.ndarray]) -> np.ndarray:
+    """Horizontal root velocity of the keys (zero with fewer than two), metres per frame."""
+    channels = horizontal_root_channels(names)
+    if channels.size == 0 or len(key_poses) < 2:
+        return np.zeros(channels.size)
+    return key_velocity(key_poses, channels)
+
+
+def _travel(names: tuple[str, ...], key_poses: Mapping[int, np.ndarray],
+            frames: np.ndarray) -> np.ndarray:
+    """World offset of each frame from travelling at the keys' speed, shape (n, 3)."""
+    travel = np.zeros((len(frames), 3))
+    axes = [{"tx": 0, "tz": 2}[names[i].rsplit(".", 1)[-1]]
+            for i in horizontal_root_channels(names)]  # X first, as the velocity
+    travel[:, axes] = frames[:, None] * _velocity(names, key_poses)
+    return travel
+
+
+def _stride(names: tuple[str, ...], key_poses: Mapping[int, np.ndarray], period: int,
+            mode: str) -> np.ndarray:
+    """How far the closing frame of a loop moves on from its first."""
+    return period * _velocity(names, key_poses) if mode == "forward" else 0.0
