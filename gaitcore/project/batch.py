@@ -116,8 +116,7 @@ class ClipSummary:
         spec = self.spec.to_dict() if self.spec else {}
         row = {
             "clip": self.clip, "status": self.status, "usable": self.usable,
-            "verdict": self.verdict, "period": _rounded(self.period_frames, 3),
-            "r1": _rounded(self.r1, 4), "r2": _rounded(self.r2, 4),
+            "verdict": self.verdict, "period": self.period_frames, "r1": self.r1, "r2": self.r2,
             "cycle_start": self.cycle_start, "cycle_stop": self.cycle_stop,
             "frames": self.frames, "error": self.error, "path": self.source,
         }
@@ -325,11 +324,11 @@ def _silhouettes(spec: ClipSpec, project: Project):
 
 def _done(spec: ClipSpec, analysis: Analysis) -> ClipSummary:
     d = analysis.diagnosis
-    r = [float(v) for v in d.correlations if math.isfinite(v)] + [None, None]
+    r = [_rounded(float(v), 4) for v in d.correlations] + [None, None]
     return ClipSummary(
         spec.clip, "done", str(spec.path), spec, frames=analysis.n_frames,
         usable=d.verdict.value == "usable", verdict=d.verdict.value,
-        period_frames=float(d.period_frames), r1=r[0], r2=r[1],
+        period_frames=_rounded(float(d.period_frames), 3), r1=r[0], r2=r[1],
         cycle_start=spec.start, cycle_stop=spec.start + analysis.n_frames,
     )
 
@@ -349,8 +348,9 @@ def _write_json(path: Path, data: dict) -> None:
     write_atomic(path, (json.dumps(data, indent=1, allow_nan=False) + "\n").encode("utf-8"))
 
 
-def _rounded(value: float | None, digits: int) -> float | None:
-    return None if value is None or not math.isfinite(value) else round(value, digits)
+def _rounded(value: float, digits: int) -> float | None:
+    """``value`` rounded as the summary shows it (None when not finite)."""
+    return round(value, digits) if math.isfinite(value) else None
 
 
 def _opt(value, kind):

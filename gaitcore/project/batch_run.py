@@ -15,6 +15,8 @@ from __future__ import annotations
 import importlib.util
 import logging
 import os
+import signal
+import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -114,8 +116,14 @@ def run_batch(manifest: Manifest, out_dir: Path, *, scheduler: str | None = None
     report(progress, skipped, len(rows), "batch cancelled")
     if todo:
         n_workers = min(workers or default_workers(), len(todo))
-        with _client(scheduler, n_workers, say) as client:
-            _run_tasks(client, todo, out_dir, settings, summary, progress, say, skipped)
+        try:
+            with _client(scheduler, n_workers, say) as client:
+                _run_tasks(client, todo, out_dir, settings, summary, progress, say, skipped)
+        finally:  # after the workers stopped: a folder completed meanwhile counts as done
+            for spec in todo:
+                if summary.status(spec.clip) == "pending":
+                    summary.set(finished_result(out_dir, spec) or pending(spec), write=False)
+            summary.write()
     return BatchResult(summary.rows(), len(todo), skipped)
 
 
@@ -139,7 +147,6 @@ def _run_tasks(client, todo: list[ClipSpec], out_dir: Path, settings: AnalysisSe
             report(progress, done, len(summary.rows()), "batch cancelled")
     finally:
         client.cancel(list(futures))
-        summary.write()
 
 
 def _task(spec: ClipSpec, out_dir: Path, settings: AnalysisSettings) -> ClipSummary:
@@ -174,12 +181,27 @@ def _client(scheduler: str | None, n_workers: int, say: Callable[[str], None]) -
             yield client
         return
     dashboard = importlib.util.find_spec("bokeh") is not None
-    with LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                      dashboard_address=":0" if dashboard else None,
-                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+    with _sigint_ignored():  # the worker processes inherit it: Ctrl+C is the client's to handle
+        cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                               dashboard_address=":0" if dashboard else None,
+                               silence_logs=logging.ERROR)
+    with cluster, Client(cluster) as client:
         link = cluster.dashboard_link if dashboard else "off (install bokeh to watch the batch in a browser)"
         say(f"local cluster: {n_workers} worker process(es); dashboard: {link}")
         yield client
+
+
+@contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """Ignore SIGINT while processes are started (a terminal sends it to the whole group)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 class _Summary:
@@ -194,9 +216,12 @@ class _Summary:
     def rows(self) -> tuple[ClipSummary, ...]:
         return tuple(self._rows.values()) + tuple(self._bad)
 
-    def set(self, row: ClipSummary) -> None:
+    def status(self, clip: str) -> str:
+        return self._rows[clip].status
+
+    def set(self, row: ClipSummary, *, write: bool = True) -> None:
         self._rows[row.clip] = row
-        if time.monotonic() - self._written >= SUMMARY_EVERY_S:
+        if write and time.monotonic() - self._written >= SUMMARY_EVERY_S:
             self.write()
 
     def write(self) -> None:
