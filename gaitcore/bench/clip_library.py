@@ -1,4 +1,4 @@
-"""A library of small generated clips for batch tests and the batch benchmark.
+"""A library of small generated clips for the batch tests and the batch benchmark.
 
 Gait clips are rendered horses (gaitcore.bench) at several gaits and periods, shifted
 across a wider frame at several speeds (the camera lags the animal), written as folders of
