@@ -209,7 +209,7 @@ class _Summary:
 
     def __init__(self, out_dir: Path, manifest: Manifest, rows: dict[str, ClipSummary]) -> None:
         self._out_dir, self._manifest, self._rows = out_dir, manifest, rows
-        self._bad = [ClipSummary(f"line-{p.line}", "bad row", "", error=str(p))
+        self._bad = [ClipSummary(f"line-{p.line}", "bad row", p.path, error=str(p))
                      for p in manifest.problems]
         self._written = 0.0
 

@@ -81,10 +81,11 @@ class ClipSpec:
 
 @dataclass(frozen=True)
 class RowProblem:
-    """A manifest row that cannot run: its line number and one line saying why."""
+    """A manifest row that cannot run: its line number, one line saying why, its path cell."""
 
     line: int
     message: str
+    path: str = ""
 
     def __str__(self) -> str:
         return f"line {self.line}: {self.message}"
@@ -144,7 +145,8 @@ def read_manifest(path: str | Path) -> Manifest:
                 raise GaitInputError(f"clip id {spec.clip!r} repeats line {seen[spec.clip]}: "
                                      "give the rows distinct values in a 'clip' column")
         except GaitInputError as exc:
-            problems.append(RowProblem(line, str(exc)))
+            cell = cells[header.index("path")].strip() if len(cells) > header.index("path") else ""
+            problems.append(RowProblem(line, str(exc), cell))
             continue
         seen[spec.clip] = line
         clips.append(spec)

@@ -60,7 +60,7 @@ def test_bad_rows_are_reported_one_line_each_and_the_rest_kept(masks):
     assert [c.clip for c in m.clips] == ["ok"]
     by_line = {p.line: p.message for p in m.problems}
     assert sorted(by_line) == [3, 4, 5, 6, 7, 8, 9]
-    assert "missing.mp4 does not exist" in by_line[3]
+    assert "missing.mp4 does not exist" in by_line[3] and m.problems[0].path == "missing.mp4"
     assert "'1,2,3' is not four integers" in by_line[4]
     assert "unknown column 'strat'" in by_line[5]
     assert "stop 3 is not after start 9" in by_line[6]
@@ -152,3 +152,35 @@ def test_summary_round_trips_through_csv_and_json(masks, tmp_path):
     assert spec_from_dict(spec.to_dict()) == spec
     with pytest.raises(GaitInputError, match="cannot read the batch summary"):
         read_summary(tmp_path / "m.csv")
+
+
+class _Terminal:
+    def __init__(self, tty: bool) -> None:
+        self.text, self._tty = "", tty
+
+    def isatty(self) -> bool:
+        return self._tty
+
+    def write(self, s: str) -> None:
+        self.text += s
+
+    def flush(self) -> None:
+        pass
+
+
+def test_the_progress_bar_redraws_one_line_on_a_terminal_and_prints_lines_elsewhere():
+    from gaitcore.project.batch_command import TerminalBar
+
+    tty = _Terminal(True)
+    bar = TerminalBar(tty)
+    assert bar.update(3, 12) is True
+    bar.line("w3: usable")
+    bar.close()
+    assert "\r[#######.......................] 3/12 clips" in tty.text
+    assert "w3: usable\n" in tty.text and tty.text.endswith("\n")
+    plain = _Terminal(False)
+    bar = TerminalBar(plain)
+    bar.update(3, 12)
+    bar.line("w3: usable")
+    bar.close()
+    assert plain.text == "w3: usable\n"
