@@ -1,7 +1,7 @@
 """Batch benchmark: ``gaitcore batch`` on 2 worker processes against 1, in the same run.
 
-- The library: 12 colour videos of a rendered horse (canter and gallop at two periods each,
-  shifted across the frame at three speeds), 200 frames of 232 x 120, each with its box: every
+- The library: 16 colour videos of a rendered horse (canter and gallop at two periods each,
+  shifted across the frame at four speeds), 300 frames of 265 x 120, each with its box: every
   clip is decoded, segmented from the box's rectangles, tracked and analysed (a few seconds
   of one core each).
 - The same library is run by :func:`gaitcore.project.batch_run.run_batch` on a local Dask
@@ -25,8 +25,8 @@ from gaitcore.project.batch_run import run_batch
 from gaitcore.project.manifest import read_manifest
 
 GAITS = {"canter": (18.0, 24.0), "gallop": (14.0, 20.0)}
-SPEEDS = (0.0, 0.25, 0.35)
-N_FRAMES = 200
+SPEEDS = (0.0, 0.15, 0.25, 0.35)
+N_FRAMES = 300
 WORKERS = (1, 2)
 
 

@@ -50,6 +50,7 @@ SUMMARY_NAMES = ("summary.csv", "summary.json")
 STATUSES = ("done", "failed", "pending", "bad row")
 """Analysed; could not be analysed (see ``error``); not run yet; a manifest row that cannot run."""
 FORMAT = "gaitstudio-batch"
+CLIP_FORMAT = "gaitstudio-batch-clip"
 VERSION = 1
 _PARTIAL = ".partial-"
 SUMMARY_COLUMNS = ("clip", "status", "usable", "verdict", "period", "r1", "r2", "cycle_start",
@@ -152,8 +153,6 @@ class ClipSummary:
             raise GaitInputError(f"batch summary row {row.get('clip', '?')!r} is malformed ({exc})") from None
 
 
-
-
 def pending(spec: ClipSpec) -> ClipSummary:
     """The row of a clip not analysed yet."""
     return ClipSummary(spec.clip, "pending", str(spec.path), spec)
@@ -223,7 +222,7 @@ def analyze_clip(spec: ClipSpec, out_dir: Path, *,
         except (GaitInputError, OSError) as exc:
             summary = failed(spec, exc)
         save_project(project, tmp / PROJECT_NAME)
-        _write_json(tmp / RESULT_NAME, {"format": FORMAT + "-clip", "version": VERSION,
+        _write_json(tmp / RESULT_NAME, {"format": CLIP_FORMAT, "version": VERSION,
                                         "clip": summary.to_row()})
         _publish(tmp, out_dir / spec.clip)
     finally:
@@ -251,6 +250,8 @@ def finished_result(out_dir: Path, spec: ClipSpec) -> ClipSummary | None:
     """
     try:
         data = json.loads((Path(out_dir) / spec.clip / RESULT_NAME).read_text(encoding="utf-8"))
+        if data.get("format") != CLIP_FORMAT or data.get("version", 0) > VERSION:
+            return None
         stored = ClipSummary.from_row(data["clip"])
     except (OSError, ValueError, KeyError, TypeError):
         return None

@@ -183,7 +183,7 @@ def _client(scheduler: str | None, n_workers: int, say: Callable[[str], None]) -
     dashboard = importlib.util.find_spec("bokeh") is not None
     with _sigint_ignored():  # the worker processes inherit it: Ctrl+C is the client's to handle
         cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                               dashboard_address=":0" if dashboard else None,
+                               dashboard_address=":0",  # a free port: never 8787 taken
                                silence_logs=logging.ERROR)
     with cluster, Client(cluster) as client:
         link = cluster.dashboard_link if dashboard else "off (install bokeh to watch the batch in a browser)"
@@ -193,7 +193,11 @@ def _client(scheduler: str | None, n_workers: int, say: Callable[[str], None]) -
 
 @contextmanager
 def _sigint_ignored() -> Iterator[None]:
-    """Ignore SIGINT while processes are started (a terminal sends it to the whole group)."""
+    """Ignore SIGINT while processes are started (a terminal sends it to the whole group).
+
+    The worker processes inherit the ignored disposition and leave Ctrl+C to the client;
+    a Ctrl+C during the few seconds of the start itself is lost.
+    """
     if threading.current_thread() is not threading.main_thread():
         yield
         return
