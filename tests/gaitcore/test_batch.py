@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import socket
 from pathlib import Path
 
 import pytest
@@ -184,3 +185,21 @@ def test_the_progress_bar_redraws_one_line_on_a_terminal_and_prints_lines_elsewh
     bar.line("w3: usable")
     bar.close()
     assert plain.text == "w3: usable\n"
+
+
+def test_worker_count_and_an_unreachable_scheduler_are_one_line_errors(masks, tmp_path, capsys,
+                                                                       monkeypatch):
+    from gaitcore.project import batch_run
+
+    manifest = _manifest(masks.parent, "path\nwalker\n")
+    out = str(tmp_path / "out")
+    assert main(["batch", str(manifest), "--out", out, "--workers", "0"]) == 2
+    assert "--workers must be at least 1" in capsys.readouterr().err
+    monkeypatch.setattr(batch_run, "CONNECT_TIMEOUT_S", 1.0)
+    with socket.socket() as s:  # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    assert main(["batch", str(manifest), "--out", out, "--scheduler", f"tcp://127.0.0.1:{port}"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.splitlines()[-1].startswith("gaitcore: error: cannot reach the Dask scheduler")
+    assert "Traceback" not in err
