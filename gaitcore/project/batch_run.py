@@ -144,7 +144,7 @@ def _run_tasks(client, todo: list[ClipSpec], out_dir: Path, settings: AnalysisSe
             summary.set(row)
             say(_outcome(row))
             done += 1
-            report(progress, done, len(summary.rows()), "batch cancelled")
+            report(progress, done, done + len(futures), "batch cancelled")
     finally:
         client.cancel(list(futures))
 
