@@ -3,8 +3,8 @@
 Prints the dashboard's address, a progress bar on a terminal (one line per clip
 otherwise), the rows of the manifest that cannot run, and a last line counting the
 verdicts. Exit status 0 when the batch ran (failed clips are lines of the summary), 2 for
-a manifest that cannot be read as a whole, 130 when interrupted (the summary is
-consistent and a rerun goes on where this one stopped).
+a manifest that cannot be read as a whole or has no row that can run, 130 when interrupted
+(the summary is consistent and a rerun goes on where this one stopped).
 """
 
 from __future__ import annotations
@@ -51,6 +51,9 @@ def run(args: argparse.Namespace) -> int:
     manifest = read_manifest(args.manifest)
     for problem in manifest.problems:
         print(f"gaitcore: {args.manifest} {problem}", file=sys.stderr)
+    if not manifest.clips:
+        raise GaitInputError(f"none of the {len(manifest.problems)} rows of {args.manifest} can "
+                             "run: fix the rows reported above")
     bar = TerminalBar(sys.stderr)
     result = run_batch(manifest, args.out, scheduler=args.scheduler, workers=args.workers,
                        progress=bar.update, notify=bar.line)

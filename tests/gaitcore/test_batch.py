@@ -88,6 +88,10 @@ def test_the_command_exits_2_with_one_line_for_a_bad_manifest(tmp_path, capsys):
     assert main(["batch", str(tmp_path / "none.csv"), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "cannot read the manifest" in err
+    only_bad = _manifest(tmp_path, "path\nmissing.mp4\n")
+    assert main(["batch", str(only_bad), "--out", str(tmp_path / "out")]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert "line 2: missing.mp4 does not exist" in lines[0] and "none of the 1 rows" in lines[1]
 
 
 def test_box_stands_for_the_middle_as_subject_and_the_outside_as_background():

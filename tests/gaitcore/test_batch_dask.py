@@ -14,9 +14,9 @@ from pathlib import Path
 
 import pytest
 
+from gaitcore.bench.clip_library import make_library, write_manifest
 from gaitcore.cli import main
 from gaitcore.project.batch import RESULT_NAME, read_summary
-from gaitcore.bench.clip_library import make_library, write_manifest
 from tests.gaitcore.walker import walker_clip, write_mask_folder
 
 ROOT = Path(__file__).resolve().parents[2]
