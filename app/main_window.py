@@ -25,6 +25,7 @@ from app.posing import PosingController
 from app.state import AppState
 from app.tools import ToolsController
 from app.widgets.animation_view import AnimationView
+from app.widgets.batch_table import BatchTableDialog
 from app.widgets.diagnosis_panel import DiagnosisPanel
 from app.widgets.eigen_view import EigenImagesView
 from app.widgets.frame_view import FrameView
@@ -33,6 +34,8 @@ from app.widgets.pose_panel import PosePanel
 from app.widgets.pose_viewport import PoseViewport
 from app.widgets.timeline import TimelineWidget
 from app.workers import FrameLoader, JobRunner
+from gaitcore.errors import GaitInputError
+from gaitcore.project.batch import read_summary
 
 APP_NAME = "Gait Studio"
 
@@ -63,6 +66,7 @@ class MainWindow(QMainWindow):
                  autosave_ms: int = 60_000, remember_layout: bool = True) -> None:
         super().__init__()
         self._remember_layout = remember_layout
+        self.batch_table: BatchTableDialog | None = None
         self.setObjectName("mainWindow")
         self.state = AppState(self)
         self.runner = JobRunner(self)
@@ -144,6 +148,7 @@ class MainWindow(QMainWindow):
         file = bar.addMenu("&File")
         self._action(file, "&Open project or video...", QKeySequence.StandardKey.Open, self.open_dialog)
         self._action(file, "Open image or &mask folder...", "Ctrl+Shift+O", self.open_folder_dialog)
+        self._action(file, "Open &batch summary...", None, self.open_batch_dialog)
         self.recent_menu = file.addMenu("Open &recent")
         self._fill_recent(self.documents.recent_files())
         file.addSeparator()
@@ -224,6 +229,24 @@ class MainWindow(QMainWindow):
         path = self.asker.open_folder(None)
         if path is not None:
             self.open_path(path)
+
+    def open_batch_dialog(self) -> None:
+        path = self.asker.open_file("Open batch summary", "Batch summaries (*.json *.csv)")
+        if path is not None:
+            self.open_batch_summary(path)
+
+    def open_batch_summary(self, path: Path) -> BatchTableDialog | None:
+        """Show a ``gaitcore batch`` summary; its clips open as projects from there."""
+        try:
+            rows = read_summary(path)
+        except GaitInputError as exc:
+            self.asker.error("Cannot open the batch summary", str(exc))
+            return None
+        self.batch_table = BatchTableDialog(rows, path, self)
+        self.batch_table.clipChosen.connect(self.open_path)
+        self.batch_table.messageRaised.connect(self._show_message)
+        self.batch_table.show()
+        return self.batch_table
 
     def offer_recovery(self) -> bool:
         """Offer the newest autosaved copy left by a crash; True when one was recovered."""

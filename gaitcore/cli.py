@@ -14,6 +14,7 @@ from pathlib import Path
 from gaitcore.bench import synth_command
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Cancelled
+from gaitcore.project import batch_command
 
 
 class _Parser(argparse.ArgumentParser):
@@ -291,6 +292,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_animate(sub)
     synth_command.add_parser(sub)
     _add_evaluate(sub)
+    batch_command.add_parser(sub)
     return parser
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from itertools import islice
 from pathlib import Path
 
 import numpy as np
@@ -64,9 +65,14 @@ def frame_rate(project: Project, source: FrameSource | None) -> float:
 
 
 # -- silhouettes -----------------------------------------------------------------------------
-def silhouettes_from_masks(folder: Path, progress: Progress | None = None) -> Silhouettes:
-    """Tracked silhouettes of a folder of binary masks, streamed (segmentation is skipped)."""
-    roi = crop_rois(iter_mask_folder(Path(folder)), max_side=WORK_SIDE_PX, progress=progress)
+def silhouettes_from_masks(folder: Path, progress: Progress | None = None, *,
+                           start: int = 0, stop: int | None = None) -> Silhouettes:
+    """Tracked silhouettes of a folder of binary masks, streamed (segmentation is skipped).
+
+    ``start`` and ``stop`` trim the clip to masks ``start <= f < stop`` in name order.
+    """
+    masks = islice(iter_mask_folder(Path(folder)), start, stop)
+    roi = crop_rois(masks, max_side=WORK_SIDE_PX, progress=progress)
     return Silhouettes(roi, "masks")
 
 

@@ -72,7 +72,7 @@ def save_project(project: Project, path: str | os.PathLike) -> None:
     try:
         side.mkdir(parents=True, exist_ok=True)
         doc = _to_json(project, p.parent, side)
-        _write_atomic(p, (json.dumps(doc, indent=1) + "\n").encode("utf-8"))
+        write_atomic(p, (json.dumps(doc, indent=1) + "\n").encode("utf-8"))
         keep = set(doc["silhouettes"]["arrays"].values()) if doc["silhouettes"] else set()
         for f in side.iterdir():
             if _ARRAY_NAME.match(f.name) and f.name not in keep:
@@ -259,7 +259,7 @@ def _write_array(side: Path, stem: str, arr: np.ndarray) -> str:
     data = buf.getvalue()
     name = f"{stem}-{hashlib.sha256(data).hexdigest()[:16]}.npy"
     if not (side / name).exists():
-        _write_atomic(side / name, data)
+        write_atomic(side / name, data)
     return name
 
 
@@ -298,7 +298,7 @@ def _read_array(side: Path, name: str, kind: str, ndim: int) -> np.ndarray:
     return arr
 
 
-def _write_atomic(path: Path, data: bytes) -> None:
+def write_atomic(path: Path, data: bytes) -> None:
     """Write ``data`` to a temporary file beside ``path``, fsync it, rename it over ``path``."""
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:

@@ -1,0 +1,364 @@
+"""One clip of a batch: analyse it as ``gaitcore analyze`` does, and the batch's summary.
+
+:func:`analyze_clip` is the whole task a batch worker runs for a clip: open the footage
+over its trim, get the silhouettes (a folder of masks is tracked; colour footage is
+segmented from the rectangles the box stands for), analyse them (PCA, diagnosis,
+key-images), and write ``OUT/<clip>/``:
+
+- ``clip.gaitproj`` (and ``clip.gaitproj.d/``): the project, with the footage, its trim,
+  the rectangles and the tracked silhouettes, which the app opens as it is;
+- ``analysis.json``: as ``gaitcore analyze`` writes it;
+- ``result.json``: the clip's summary row, written last.
+
+The folder is built under a temporary name beside its final place and renamed into place
+when complete, so a clip folder is either whole or absent. A clip that cannot be analysed
+(unreadable, no animal, too short) gets a folder too, whose summary row holds the one-line
+error. The summary of the whole batch (``summary.csv`` and ``summary.json``) is a list of
+:class:`ClipSummary` rows, in manifest order.
+
+The box of a manifest row stands, for now, for subject and background rectangles
+(:func:`box_rectangles`); the one-box segmentation of issue #11 replaces that mapping, and
+the cycle finder of issue #12 fills ``cycle_start``/``cycle_stop`` (today: the whole
+analysed range).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import shutil
+import uuid
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from gaitcore.analysis.analyze import Analysis, AnalysisSettings
+from gaitcore.errors import GaitInputError
+from gaitcore.io.analysis_file import write_analysis_json
+from gaitcore.project.document import Project
+from gaitcore.project.manifest import ClipSpec, spec_from_dict
+from gaitcore.project.steps import analyze, open_source, segment, silhouettes_from_masks
+from gaitcore.project.storage import save_project, write_atomic
+from gaitcore.silhouettes.annotations import Rect
+from gaitcore.silhouettes.extract import is_mask_folder
+
+PROJECT_NAME = "clip.gaitproj"
+ANALYSIS_NAME = "analysis.json"
+RESULT_NAME = "result.json"
+SUMMARY_NAMES = ("summary.csv", "summary.json")
+STATUSES = ("done", "failed", "pending", "bad row")
+"""Analysed; could not be analysed (see ``error``); not run yet; a manifest row that cannot run."""
+FORMAT = "gaitstudio-batch"
+CLIP_FORMAT = "gaitstudio-batch-clip"
+VERSION = 1
+_PARTIAL = ".partial-"
+SUMMARY_COLUMNS = ("clip", "status", "usable", "verdict", "period", "r1", "r2", "cycle_start",
+                   "cycle_stop", "frames", "error", "path", "box", "subject", "background",
+                   "start", "stop", "fps")
+"""Columns of ``summary.csv`` (and keys of each clip of ``summary.json``)."""
+
+
+@dataclass(frozen=True)
+class ClipSummary:
+    """The summary row of one clip of a batch.
+
+    Attributes
+    ----------
+    clip : str
+        Clip id (its output folder's name).
+    status : {"done", "failed", "pending", "bad row"}
+    source : str
+        The footage path (as the manifest gave it for a bad row).
+    spec : ClipSpec or None
+        The manifest row (None for a bad row).
+    frames : int or None
+        Frames analysed.
+    usable : bool or None
+        The paper's verdict (Section 5.2): r1 and r2 at least 0.6.
+    verdict : str
+        ``usable``, ``try sketching`` or ``not usable``.
+    period_frames : float or None
+        Period of the silhouettes, frames (half the gait cycle for a symmetric walk).
+    r1, r2 : float or None
+        Correlations of PC1 and PC2 with their band-passed versions.
+    cycle_start, cycle_stop : int or None
+        Source frames of the best cycle (today the whole analysed range).
+    error : str
+        One line: why the clip failed or its row cannot run.
+    """
+
+    clip: str
+    status: str
+    source: str
+    spec: ClipSpec | None = None
+    frames: int | None = None
+    usable: bool | None = None
+    verdict: str = ""
+    period_frames: float | None = None
+    r1: float | None = None
+    r2: float | None = None
+    cycle_start: int | None = None
+    cycle_stop: int | None = None
+    error: str = ""
+
+    @property
+    def score(self) -> float:
+        """The smaller of r1 and r2 (the verdict's weaker PC), -1 when not analysed."""
+        return min(self.r1, self.r2) if self.r1 is not None and self.r2 is not None else -1.0
+
+    def project_path(self, out_dir: Path) -> Path | None:
+        """The clip's project file under the batch folder ``out_dir``, None if it has none."""
+        path = Path(out_dir) / self.clip / PROJECT_NAME
+        return path if self.status in ("done", "failed") and path.is_file() else None
+
+    def to_row(self) -> dict:
+        """The row as plain values, keyed by :data:`SUMMARY_COLUMNS`."""
+        spec = self.spec.to_dict() if self.spec else {}
+        row = {
+            "clip": self.clip, "status": self.status, "usable": self.usable,
+            "verdict": self.verdict, "period": self.period_frames, "r1": self.r1, "r2": self.r2,
+            "cycle_start": self.cycle_start, "cycle_stop": self.cycle_stop,
+            "frames": self.frames, "error": self.error, "path": self.source,
+        }
+        row.update({k: spec.get(k) for k in ("box", "subject", "background", "start", "stop", "fps")})
+        return row
+
+    @classmethod
+    def from_row(cls, row: dict) -> ClipSummary:
+        """Read back :meth:`to_row` (JSON values, or the strings of a CSV row).
+
+        Raises
+        ------
+        GaitInputError
+            For a row that is not a batch summary row.
+        """
+        try:
+            status = str(row["status"])
+            if status not in STATUSES:
+                raise ValueError(f"status {status!r}")
+            spec = None if status == "bad row" else spec_from_dict(row)
+            return cls(
+                clip=str(row["clip"]), status=status, source=str(row.get("path") or ""),
+                spec=spec, frames=_opt(row.get("frames"), int),
+                usable=_opt(row.get("usable"), lambda v: v if isinstance(v, bool) else v == "True"),
+                verdict=str(row.get("verdict") or ""), period_frames=_opt(row.get("period"), float),
+                r1=_opt(row.get("r1"), float), r2=_opt(row.get("r2"), float),
+                cycle_start=_opt(row.get("cycle_start"), int), cycle_stop=_opt(row.get("cycle_stop"), int),
+                error=str(row.get("error") or ""),
+            )
+        except (KeyError, TypeError, ValueError) as exc:
+            if isinstance(exc, GaitInputError):
+                raise
+            raise GaitInputError(f"batch summary row {row.get('clip', '?')!r} is malformed ({exc})") from None
+
+
+def pending(spec: ClipSpec) -> ClipSummary:
+    """The row of a clip not analysed yet."""
+    return ClipSummary(spec.clip, "pending", str(spec.path), spec)
+
+
+def box_rectangles(box: Rect, size_wh: tuple[int, int]) -> tuple[tuple[Rect, ...], tuple[Rect, ...]]:
+    """Subject and background rectangles that a box around the animal stands for.
+
+    The subject is the middle half of the box (mostly animal); the background is the frame
+    outside the box grown by a tenth of its size on each side. The one-box segmentation of
+    issue #11 replaces this mapping.
+
+    Raises
+    ------
+    GaitInputError
+        A box outside the frame, or one that leaves no background around it.
+    """
+    w, h = size_wh
+    b = box.clipped_to(w, h)
+    subject = (Rect(b.x + b.w // 4, b.y + b.h // 4, max(1, b.w // 2), max(1, b.h // 2)),)
+    x0, y0 = b.x - max(2, b.w // 10), b.y - max(2, b.h // 10)
+    x1, y1 = b.x + b.w + max(2, b.w // 10), b.y + b.h + max(2, b.h // 10)
+    bands = ((0, 0, w, y0), (0, y1, w, h - y1), (0, 0, x0, h), (x1, 0, w - x1, h))
+    background = tuple(Rect(*band) for band in bands if band[2] > 0 and band[3] > 0)
+    if not background:
+        raise GaitInputError(f"box {box.as_tuple()} covers the whole {w}x{h} frame: draw it "
+                             "tight around the animal so that background shows around it")
+    return subject, background
+
+
+def analyze_clip(spec: ClipSpec, out_dir: Path, *,
+                 settings: AnalysisSettings = AnalysisSettings()) -> ClipSummary:
+    """Analyse one clip and write its outputs to ``out_dir/<clip>/`` atomically.
+
+    Parameters
+    ----------
+    spec : ClipSpec
+        The manifest row.
+    out_dir : Path
+        The batch's output folder.
+    settings : AnalysisSettings
+        As ``gaitcore analyze`` takes them.
+
+    Returns
+    -------
+    ClipSummary
+        Status ``done``, or ``failed`` with the one-line error when the clip cannot be
+        analysed (bad input is never raised: it is the clip's result).
+
+    Notes
+    -----
+    Memory stays bounded as in ``gaitcore analyze``: frames are streamed, only the small
+    tracked crops are kept.
+    """
+    out_dir = Path(out_dir)
+    tmp = out_dir / f".{spec.clip}{_PARTIAL}{uuid.uuid4().hex[:8]}"
+    tmp.mkdir(parents=True)
+    try:
+        project = Project(footage=spec.path, frame_start=spec.start, frame_stop=spec.stop,
+                          fps=spec.fps, subject_rects=spec.subject, background_rects=spec.background)
+        try:
+            project = _with_box(spec, project)
+            project = replace(project, silhouettes=_silhouettes(spec, project))
+            analysis = analyze(project.silhouettes, settings)
+            write_analysis_json(tmp / ANALYSIS_NAME, analysis, source=str(spec.path))
+            summary = _done(spec, analysis)
+        except (GaitInputError, OSError) as exc:
+            summary = failed(spec, exc)
+        save_project(project, tmp / PROJECT_NAME)
+        _write_json(tmp / RESULT_NAME, {"format": CLIP_FORMAT, "version": VERSION,
+                                        "clip": summary.to_row()})
+        _publish(tmp, out_dir / spec.clip)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return summary
+
+
+def failed(spec: ClipSpec, exc: BaseException) -> ClipSummary:
+    """The row of a clip whose analysis raised ``exc`` (its message's first line)."""
+    text = str(exc).strip()
+    if isinstance(exc, OSError) and exc.strerror:
+        text = f"{exc.strerror}: {exc.filename or ''}".rstrip(": ")
+    elif not isinstance(exc, GaitInputError):
+        text = f"{type(exc).__name__}: {text}"
+    return ClipSummary(spec.clip, "failed", str(spec.path), spec,
+                       error=(text.splitlines() or [type(exc).__name__])[0])
+
+
+def finished_result(out_dir: Path, spec: ClipSpec) -> ClipSummary | None:
+    """The stored row of a clip already analysed for this very manifest row, else None.
+
+    A clip counts as finished when its folder holds a ``result.json`` whose status is
+    ``done`` and whose manifest row equals ``spec`` (a changed box or trim runs again; so
+    does a failed clip, whose file may have been fixed since).
+    """
+    try:
+        data = json.loads((Path(out_dir) / spec.clip / RESULT_NAME).read_text(encoding="utf-8"))
+        if data.get("format") != CLIP_FORMAT or data.get("version", 0) > VERSION:
+            return None
+        stored = ClipSummary.from_row(data["clip"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    if stored.status != "done" or stored.spec != spec:
+        return None
+    return replace(stored, spec=spec)
+
+
+def remove_partial_folders(out_dir: Path) -> None:
+    """Delete the temporary clip folders that an interrupted batch left in ``out_dir``."""
+    for entry in Path(out_dir).glob(f".*{_PARTIAL}*"):
+        shutil.rmtree(entry, ignore_errors=True)
+
+
+def write_summary(out_dir: Path, rows: list[ClipSummary], *, manifest: Path) -> None:
+    """Write ``summary.csv`` and ``summary.json`` in ``out_dir``, each atomically."""
+    table = [r.to_row() for r in rows]
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows({k: "" if v is None else v for k, v in row.items()} for row in table)
+    write_atomic(Path(out_dir) / SUMMARY_NAMES[0], text.getvalue().encode("utf-8"))
+    _write_json(Path(out_dir) / SUMMARY_NAMES[1], {
+        "format": FORMAT, "version": VERSION, "manifest": str(manifest), "clips": table})
+
+
+def read_summary(path: str | Path) -> tuple[ClipSummary, ...]:
+    """Read ``summary.json`` or ``summary.csv`` written by :func:`write_summary`.
+
+    Raises
+    ------
+    GaitInputError
+        Unreadable file, not a batch summary, or malformed rows.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+        if path.suffix.lower() == ".json":
+            data = json.loads(text)
+            if not isinstance(data, dict) or data.get("format") != FORMAT:
+                raise ValueError("not a Gait Studio batch summary")
+            rows = data["clips"]
+        else:
+            rows = list(csv.DictReader(io.StringIO(text)))
+            if rows and "status" not in rows[0]:
+                raise ValueError("no 'status' column")
+    except (OSError, UnicodeDecodeError, ValueError, KeyError, csv.Error) as exc:
+        reason = getattr(exc, "strerror", None) or exc
+        raise GaitInputError(f"cannot read the batch summary {path}: {reason}; open the "
+                             "summary.json or summary.csv that 'gaitcore batch' wrote") from None
+    return tuple(ClipSummary.from_row(row) for row in rows)
+
+
+# -- helpers -----------------------------------------------------------------------------
+def _with_box(spec: ClipSpec, project: Project) -> Project:
+    """The project with the rectangles the box stands for (the footage's size is needed)."""
+    if spec.box is None:
+        return project
+    with open_source(project) as source:
+        subject, background = box_rectangles(spec.box, source.size)
+    return replace(project, subject_rects=subject, background_rects=background)
+
+
+def _silhouettes(spec: ClipSpec, project: Project):
+    """Tracked silhouettes over the trim: a mask folder is tracked, colour is segmented."""
+    with open_source(project) as source:  # checks the footage and the trim
+        if is_mask_folder(spec.path):
+            return silhouettes_from_masks(spec.path, start=source.start, stop=source.stop)
+        return segment(source, project)
+
+
+def _done(spec: ClipSpec, analysis: Analysis) -> ClipSummary:
+    d = analysis.diagnosis
+    r = [_rounded(float(v), 4) for v in d.correlations] + [None, None]
+    return ClipSummary(
+        spec.clip, "done", str(spec.path), spec, frames=analysis.n_frames,
+        usable=d.verdict.value == "usable", verdict=d.verdict.value,
+        period_frames=_rounded(float(d.period_frames), 3), r1=r[0], r2=r[1],
+        cycle_start=spec.start, cycle_stop=spec.start + analysis.n_frames,
+    )
+
+
+def _publish(tmp: Path, final: Path) -> None:
+    """Rename the complete folder ``tmp`` to ``final``, replacing an older one."""
+    if final.exists():
+        old = final.with_name(f".{final.name}{_PARTIAL}old-{uuid.uuid4().hex[:8]}")
+        final.replace(old)
+        tmp.replace(final)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        tmp.replace(final)
+
+
+def _write_json(path: Path, data: dict) -> None:
+    write_atomic(path, (json.dumps(data, indent=1, allow_nan=False) + "\n").encode("utf-8"))
+
+
+def _rounded(value: float, digits: int) -> float | None:
+    """``value`` rounded as the summary shows it (None when not finite)."""
+    return round(value, digits) if math.isfinite(value) else None
+
+
+def _opt(value, kind):
+    return None if value is None or value == "" else kind(value)
+
+
+__all__ = [
+    "ClipSummary", "SUMMARY_COLUMNS", "analyze_clip", "box_rectangles", "failed",
+    "finished_result", "pending", "read_summary", "remove_partial_folders", "write_summary",
+]
