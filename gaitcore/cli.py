@@ -14,6 +14,9 @@ from pathlib import Path
 from gaitcore.bench import synth_command
 from gaitcore.errors import GaitInputError
 
+DEFAULT_FPS = 24.0
+"""Frame rate of exports when neither ``--fps`` nor the analysis gives one."""
+
 
 class _Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one line, like every other gaitcore error."""
@@ -50,6 +53,27 @@ def _range(text: str) -> tuple[float, float]:
     return lo, hi
 
 
+def _add_frame_range(p: argparse.ArgumentParser) -> None:
+    """``--start F --stop F``: the source frames to use (stop excluded), and ``--fps``."""
+    p.add_argument("--start", type=int, default=0, metavar="F",
+                   help="first source frame to use (default 0)")
+    p.add_argument("--stop", type=int, default=None, metavar="F",
+                   help="source frame to stop before (default: the end)")
+    p.add_argument("--fps", type=float, default=None,
+                   help="frame rate of the clip (default: the video's; image folders have none)")
+
+
+def _clip_fps(args: argparse.Namespace) -> float | None:
+    """``--fps``, else the video's frame rate, else None; refuses a bad ``--fps``."""
+    from gaitcore.footage.sources import video_fps
+
+    if args.fps is not None:
+        if not (args.fps > 0 and args.fps < float("inf")):
+            raise GaitInputError(f"--fps must be a positive number of frames per second, got {args.fps}")
+        return float(args.fps)
+    return video_fps(args.input) if args.input.is_file() else None
+
+
 def _add_analyze(sub) -> None:
     p = sub.add_parser(
         "analyze",
@@ -75,6 +99,7 @@ def _add_analyze(sub) -> None:
                    "(default: on the track averaged over one gait period)")
     p.add_argument("--key-time-limit", type=float, default=60.0, metavar="SECONDS",
                    help="time budget of the exact key search (default 60)")
+    _add_frame_range(p)
     p.add_argument("--json", action="store_true", help="print analysis.json on stdout")
     p.set_defaults(run=_run_analyze)
 
@@ -93,23 +118,35 @@ def _run_analyze(args: argparse.Namespace) -> int:
         key_time_limit_s=args.key_time_limit,
         stabilize_roi=not args.paper_roi,
     )
+    fps = _clip_fps(args)
     roi = load_silhouettes(args.input, args.out, subject=args.subject, background=args.background,
-                           max_side=settings.max_side_px)
-    analysis = analyze_silhouettes(roi, settings)
-    write_analysis_json(args.out / "analysis.json", analysis, source=str(args.input))
+                           max_side=settings.max_side_px, start=args.start, stop=args.stop)
+    analysis = analyze_silhouettes(roi, settings, first_frame=args.start)
+    write_analysis_json(args.out / "analysis.json", analysis, source=str(args.input), fps=fps)
     if args.json:
-        print(json.dumps(analysis_to_dict(analysis, source=str(args.input)), indent=1))
+        print(json.dumps(analysis_to_dict(analysis, source=str(args.input), fps=fps), indent=1))
     else:
         d = analysis.diagnosis
         sel = analysis.selection
-        print(f"frames: {analysis.n_frames} (subject lost in {len(analysis.lost_frames)})")
+        start, stop = analysis.frame_range
+        print(f"frames: {analysis.n_frames}, {start} to {stop - 1} "
+              f"(subject lost in {len(analysis.lost_frames)})")
         print("variance: " + " ".join(f"{100 * v:.1f}%" for v in analysis.pca.variance_ratio))
         print("r per PC: " + " ".join(f"{r:.2f}" for r in d.correlations))
         print(f"period: {d.period_frames:.1f} frames; verdict: {d.verdict.value}: {d.reason}")
-        print(f"key-images: {list(sel.frames)} (cond {sel.condition_number:.3g}, "
+        print(f"key-images: {[f + start for f in sel.frames]} (cond {sel.condition_number:.3g}, "
               f"{'proven optimal' if sel.exact else 'not proven optimal'})")
         if analysis.alternate_frames is not None:
-            print(f"alternates: {list(analysis.alternate_frames)}")
+            print(f"alternates: {[f + start for f in analysis.alternate_frames]}")
+        if analysis.alternates_note:
+            print(analysis.alternates_note)
+        for c in analysis.cycles:
+            d = c.to_dict(analysis.cycle_offset)
+            print(f"steady gait: frames {d['start']} to {d['stop'] - 1}, cycle "
+                  f"{d['period_frames']:.1f} frames, r1 = {c.r1:.2f}, r2 = {c.r2:.2f}")
+        advice = analysis.advice
+        if advice is not None and advice.cause.value != "none":
+            print(f"advice: {advice.message} {advice.next_step}")
         print(f"wrote {args.out / 'analysis.json'}")
     return 0
 
@@ -136,8 +173,9 @@ def _add_animate(sub) -> None:
                    help="also write a binary glTF with a skinned mesh (needs --skeleton)")
     p.add_argument("--skeleton", type=Path, default=None, metavar="SKEL.json|SKEL.bvh",
                    help="joint hierarchy for --bvh/--glb: a skeleton JSON, or a BVH file")
-    p.add_argument("--fps", type=float, default=24.0,
-                   help="frame rate of time_s, the BVH frame time and glTF key times (24)")
+    p.add_argument("--fps", type=float, default=None,
+                   help="frame rate of time_s, the BVH frame time and glTF key times (default: "
+                   "the clip's, from analysis.json, else 24)")
     p.add_argument("--csv-time", action="store_true",
                    help="add a time_s column (frame / fps) after 'frame' in CURVES.csv")
     p.set_defaults(run=_run_animate)
@@ -156,7 +194,7 @@ def _run_animate(args: argparse.Namespace) -> int:
     if exports and args.skeleton is None:
         raise GaitInputError(f"--{exports[0][0]} needs --skeleton SKEL.json (or a .bvh file) "
                              "to know the joint hierarchy")
-    if not (np.isfinite(args.fps) and args.fps > 0):
+    if args.fps is not None and not (np.isfinite(args.fps) and args.fps > 0):
         raise GaitInputError(f"--fps must be a positive number of frames per second, got {args.fps}")
     skeleton = None
     if args.skeleton is not None:
@@ -168,20 +206,28 @@ def _run_animate(args: argparse.Namespace) -> int:
         else:
             skeleton = Skeleton.from_json(args.skeleton)
     record = read_analysis_json(args.analysis)
+    fps = args.fps or record.fps or DEFAULT_FPS
     table = read_pose_table(args.key_poses)
     if exports:
         pose_matrix(skeleton, table)  # every channel of the skeleton posed, before any work
-    poses = table.as_dict()
+    first = record.first_frame
+    poses = {f - first: pose for f, pose in table.as_dict().items()}  # source frames -> rows
     alternates = None if args.no_switching else record.alternate_frames
     posed = set(record.key_frames) | set(alternates or ())
-    extra = sorted(set(poses) - posed)
+    extra = sorted(f + first for f in set(poses) - posed)
     if extra:
         raise GaitInputError(
             f"{args.key_poses}: frame(s) {extra} are not key-images of this analysis "
-            f"(keys {list(record.key_frames)}"
-            + (f", alternates {list(alternates)}" if alternates else "")
+            f"(keys {[f + first for f in record.key_frames]}"
+            + (f", alternates {[f + first for f in alternates]}" if alternates else "")
             + ")"
         )
+    if alternates:
+        from gaitcore.analysis.alternates import swap_warning
+
+        warning = swap_warning(record.loop_angle, record.key_frames, alternates)
+        if warning:
+            print(f"gaitcore: warning: {warning}", file=sys.stderr)
     coords = record.filtered_projections if args.filtered else record.projections
     curves = animate(
         coords,
@@ -192,13 +238,13 @@ def _run_animate(args: argparse.Namespace) -> int:
         alpha=record.alpha,
         clamp=args.clamp,
     )
-    out_table = PoseTable(np.arange(record.n_frames), table.columns, curves)
-    write_pose_table(args.out, out_table, fps=args.fps if args.csv_time else None)
+    out_table = PoseTable(first + np.arange(record.n_frames), table.columns, curves)
+    write_pose_table(args.out, out_table, fps=fps if args.csv_time else None)
     print(f"wrote {args.out} ({record.n_frames} frames, {len(table.columns)} channels)")
     for flag, path in exports:  # the flag, not the file's suffix, names the format
-        EXPORTERS[f".{flag}"].write(path, skeleton, out_table, args.fps)
+        EXPORTERS[f".{flag}"].write(path, skeleton, out_table, fps)
         print(f"wrote {path} ({skeleton.n_joints} joints, {record.n_frames} frames "
-              f"at {args.fps:g} fps)")
+              f"at {fps:g} fps)")
     return 0
 
 

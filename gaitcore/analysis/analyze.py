@@ -1,7 +1,13 @@
 """The paper's pipeline from silhouettes to animation, as two steps a script or the GUI runs.
 
 ``analyze_silhouettes``: ROI crops -> PCA -> spectral diagnosis -> key-image selection ->
-(optionally) alternates for the switching models. ``animate``: key poses -> a pose per frame.
+(optionally) alternates for the switching models; beside it, the stretches of steady gait of
+the whole clip and advice that names what stands in the way. ``rekey`` redoes the keys only.
+
+Frames: the silhouettes given start at source frame ``first_frame``; a trim (``frame_range``,
+source frames) restricts the analysis to part of them. Inside an :class:`Analysis`, frames are
+rows of the analysed range (0-based); ``Analysis.first_frame`` maps them back to the source.
+Settings (pinned, forbidden frames) are in source frames, as the artist sees them.
 """
 
 from __future__ import annotations
@@ -11,7 +17,9 @@ from dataclasses import dataclass, field, replace
 import cv2
 import numpy as np
 
+from gaitcore.analysis.advice import Advice, advise
 from gaitcore.analysis.alternates import loop_angle, propose_alternates
+from gaitcore.analysis.cycles import Cycle, find_cycles
 from gaitcore.analysis.image_pca import ImagePCA
 from gaitcore.analysis.kernel import DEFAULT_ALPHA
 from gaitcore.analysis.keyimages import KeySelection, select_key_images
@@ -88,7 +96,18 @@ class Analysis:
     loop_angle : ndarray of shape (n,)
         Unwrapped angle around the (PC1, PC2) loop of the filtered trajectory.
     alternate_frames : tuple of int or None
-        One per key, in key order, when switching is on.
+        One per key, in key order, when switching is on and every key has one.
+    alternates_note : str or None
+        Why no alternates are proposed although switching is on, or a warning about them.
+    first_frame : int
+        Source frame of row 0 (the start of the trim).
+    cycles : tuple of Cycle
+        Stretches of steady gait over all the silhouettes given (not only the trim), in
+        their rows; ``cycle_offset`` maps them to source frames.
+    cycle_offset : int
+        Source frame of the first silhouette given.
+    advice : Advice
+        What stands in the way of a usable analysis, and the one next step.
     """
 
     settings: AnalysisSettings
@@ -99,6 +118,11 @@ class Analysis:
     selection: KeySelection
     loop_angle: np.ndarray
     alternate_frames: tuple[int, ...] | None = field(default=None)
+    alternates_note: str | None = None
+    first_frame: int = 0
+    cycles: tuple[Cycle, ...] = ()
+    cycle_offset: int = 0
+    advice: Advice | None = None
 
     @property
     def n_frames(self) -> int:
@@ -117,6 +141,11 @@ class Analysis:
     def posed_frames(self) -> tuple[int, ...]:
         """Every frame the artist must pose: keys, then alternates when switching."""
         return self.key_frames + (self.alternate_frames or ())
+
+    @property
+    def frame_range(self) -> tuple[int, int]:
+        """Source frames ``start <= f < stop`` analysed."""
+        return self.first_frame, self.first_frame + self.n_frames
 
 
 def working_images(roi: RoiClip, max_side_px: int | None) -> np.ndarray:
@@ -144,6 +173,8 @@ def analyze_silhouettes(
     roi: RoiClip,
     settings: AnalysisSettings = AnalysisSettings(),
     *,
+    first_frame: int = 0,
+    frame_range: tuple[int, int | None] | None = None,
     sketched: bool = False,
     progress: Progress | None = None,
 ) -> Analysis:
@@ -154,28 +185,39 @@ def analyze_silhouettes(
     roi : RoiClip
         Fixed-size binary crops of the subject, one per frame.
     settings : AnalysisSettings
+    first_frame : int
+        Source frame of the first crop (when the silhouettes are of part of a clip).
+    frame_range : (int, int or None), optional
+        Source frames ``start <= f < stop`` to analyse (the trim; None: all). The stretches
+        of steady gait are searched over all the silhouettes all the same.
     sketched : bool
         The silhouettes come from sketches (changes the advice of an unusable diagnosis).
     progress : callable(done, total) -> bool, optional
-        Reports the PCA (one pass per crop placement) and the key search as equal stages;
-        returning False cancels with ``InterruptedError``.
+        Reports the cycle search, the PCA (one pass per crop placement) and the key search
+        as equal stages; returning False cancels with ``InterruptedError``.
 
     Raises
     ------
     GaitInputError
-        Too few frames for the requested keys, no motion, too few distinct silhouettes.
+        A trim outside the silhouettes, too few frames for the requested keys, no motion,
+        too few distinct silhouettes.
     """
+    start, stop = _trim(frame_range, first_frame, roi.crops.shape[0])
+    whole = roi
+    roi = replace(roi, crops=roi.crops[start:stop], centers_xy=roi.centers_xy[start:stop],
+                  lost=roi.lost[start:stop])
     found = np.nonzero(~roi.lost)[0]
     if found.size < max(settings.keys, 2) + 1:
         raise GaitInputError(
             f"only {found.size} frame(s) with a subject for {settings.keys} key-images; "
             "use a longer clip or fewer keys"
         )
-    stages = 3 if settings.stabilize_roi else 2
-    pca, proj, diagnosis = _describe(roi, settings, sketched, _stage(progress, 0, stages))
+    stages = 4 if settings.stabilize_roi else 3
+    cycles = find_cycles(whole, progress=_stage(progress, 0, stages))
+    pca, proj, diagnosis = _describe(roi, settings, sketched, _stage(progress, 1, stages))
     if settings.stabilize_roi and diagnosis.verdict is not Verdict.NOT_USABLE:
         roi = stabilize_rois(roi, diagnosis.period_frames)
-        pca, proj, diagnosis = _describe(roi, settings, sketched, _stage(progress, 1, stages))
+        pca, proj, diagnosis = _describe(roi, settings, sketched, _stage(progress, 2, stages))
     theta = loop_angle(diagnosis.filtered)
     for arr in (proj, theta):
         arr.setflags(write=False)
@@ -187,8 +229,27 @@ def analyze_silhouettes(
         diagnosis=diagnosis,
         selection=KeySelection(frames=(), condition_number=float("nan"), exact=False, nodes_visited=0),
         loop_angle=theta,
+        first_frame=first_frame + start,
+        cycles=cycles,
+        cycle_offset=first_frame,
+        advice=advise(roi, diagnosis, cycles, first_frame=first_frame, sketched=sketched),
     )
     return rekey(motion, settings, progress=_stage(progress, stages - 1, stages))
+
+
+def _trim(frame_range: tuple[int, int | None] | None, first_frame: int, n: int) -> tuple[int, int]:
+    """Rows ``start, stop`` of the silhouettes that a trim in source frames selects."""
+    if frame_range is None:
+        return 0, n
+    start = int(frame_range[0]) - first_frame
+    stop = n if frame_range[1] is None else int(frame_range[1]) - first_frame
+    if not 0 <= start < stop <= n:
+        last = first_frame + n
+        raise GaitInputError(
+            f"frames {frame_range[0]}:{frame_range[1]} are outside the clip's frames "
+            f"{first_frame}:{last}: choose {first_frame} <= start < stop <= {last}"
+        )
+    return start, stop
 
 
 _STAGE_STEPS = 1000
@@ -249,14 +310,23 @@ def rekey(
         coords,
         settings.keys,
         alpha=settings.alpha,
-        pinned=settings.pinned,
-        forbidden=tuple(sorted(set(settings.forbidden) | set(analysis.lost_frames))),
+        pinned=_rows(settings.pinned, analysis),
+        forbidden=tuple(sorted(set(_rows(settings.forbidden, analysis)) | set(analysis.lost_frames))),
         progress=progress,
         time_limit_s=settings.key_time_limit_s,
     )
-    alternates = None
+    alternates, note = None, None
     if settings.switching:
-        alternates = propose_alternates(coords, selection.frames, theta=analysis.loop_angle)
-    return replace(analysis, settings=settings, selection=selection, alternate_frames=alternates)
+        try:
+            alternates = propose_alternates(coords, selection.frames, theta=analysis.loop_angle,
+                                            period_frames=analysis.diagnosis.period_frames)
+        except GaitInputError as exc:
+            note = f"No alternates: {exc}."
+    return replace(analysis, settings=settings, selection=selection, alternate_frames=alternates,
+                   alternates_note=note)
 
 
+def _rows(frames: tuple[int, ...], analysis: Analysis) -> tuple[int, ...]:
+    """Source frames that lie in the analysed range, as its rows."""
+    start, stop = analysis.frame_range
+    return tuple(f - start for f in frames if start <= f < stop)

@@ -347,6 +347,22 @@ def open_frames(
     return _open_video(p, start, stop, fps, cache_frames)
 
 
+def video_fps(path: str | os.PathLike) -> float | None:
+    """The frame rate a video's header gives (None when it gives none), without decoding it.
+
+    Raises
+    ------
+    GaitInputError
+        When the file cannot be opened.
+    """
+    reader = _VideoReader(Path(path))
+    try:
+        fps = float(reader.cap.get(cv2.CAP_PROP_FPS))
+    finally:
+        reader.close()
+    return fps if fps > 0 and np.isfinite(fps) else None
+
+
 # -- helpers ---------------------------------------------------------------------------
 def _prefetched(items: Iterator, depth: int) -> Iterator:
     """Run ``items`` on a daemon thread, ``depth`` items ahead; errors reach the consumer."""

@@ -162,7 +162,7 @@ def test_header_that_disagrees_with_the_stream_opens_every_decodable_frame(tmp_p
     path = _claim_frames(_write_30(tmp_path / "clip.avi"), claimed)
     assert int(cv2.VideoCapture(str(path)).get(cv2.CAP_PROP_FRAME_COUNT)) == claimed
     src = open_frames(path, cache_frames=0)
-    assert len(src) == 30 and "says %d frames but 30 decode" % claimed in src.note
+    assert len(src) == 30 and f"says {claimed} frames but 30 decode" in src.note
     assert [level30(f) for f in src] == list(range(30))
     # Random access past the header's count and back, and streaming from the middle: a
     # seek that lands on another frame is caught by its timestamp.

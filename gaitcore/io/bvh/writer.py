@@ -81,7 +81,7 @@ def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: fl
     emit(children[""][0], 0)
     lines.append("MOTION")
     lines.append(f"Frames: {len(table.frames)}")
-    lines.append(f"Frame Time: {1.0 / fps:.8f}")
+    lines.append(f"Frame Time: {1.0 / fps:.10g}")  # 10 significant digits: reads back as the same rate
     motion = np.column_stack(columns) if columns else np.zeros((len(table.frames), 0))
     lines.extend(" ".join(f"{v:.6f}" for v in row) for row in motion)
     path = Path(path)
