@@ -9,25 +9,29 @@ cancels the running one; a long one (a long clip's PCA) shows its progress with 
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 from PySide6.QtCore import QObject, QTimer
 
 from app.state import AppState
 from app.workers import Job, JobRunner, Progress, ProgressDialog
-from gaitcore.analysis.alternates import propose_alternates
-from gaitcore.analysis.analyze import Analysis, AnalysisSettings, analyze_silhouettes
-from gaitcore.analysis.keyimages import select_key_images
-from gaitcore.errors import GaitInputError
+from gaitcore.analysis.analyze import Analysis, AnalysisSettings, analyze_silhouettes, rekey
 from gaitcore.project.document import Project, Silhouettes
 
 _COALESCE_MS = 80
 
 
-def analyze(silhouettes: Silhouettes, settings: AnalysisSettings, progress: Progress) -> Analysis:
-    """The whole analysis step of the paper (Sections 2.3, 3.1, 3.2, 5.2) on silhouettes."""
-    return analyze_silhouettes(silhouettes.roi, settings, sketched=silhouettes.origin == "sketched",
-                               progress=progress)
+def analyze(silhouettes: Silhouettes, settings: AnalysisSettings, trim: tuple[int, int | None],
+            progress: Progress) -> Analysis:
+    """The whole analysis step of the paper (Sections 2.3, 3.1, 3.2, 5.2) on the trimmed
+    silhouettes, and the stretches of steady gait of all of them."""
+    return analyze_silhouettes(silhouettes.roi, settings, frame_range=_fit(trim, silhouettes),
+                               sketched=silhouettes.origin == "sketched", progress=progress)
+
+
+def _fit(trim: tuple[int, int | None], silhouettes: Silhouettes) -> tuple[int, int]:
+    """The trim, clipped to the silhouettes (a stop past their end means their end)."""
+    n = silhouettes.n_frames
+    stop = n if trim[1] is None else min(trim[1], n)
+    return min(trim[0], max(0, stop - 1)), stop
 
 
 def reselect(analysis: Analysis, settings: AnalysisSettings, progress: Progress) -> Analysis:
@@ -38,19 +42,7 @@ def reselect(analysis: Analysis, settings: AnalysisSettings, progress: Progress)
     GaitInputError
         More PCs than the analysis has, or a key search that cannot be satisfied.
     """
-    available = analysis.projections.shape[1]
-    if settings.pcs > available:
-        raise GaitInputError(f"the clip has only {available} components: use at most {available} PCs")
-    coords = analysis.projections[:, : settings.pcs]
-    selection = select_key_images(
-        coords, settings.keys, alpha=settings.alpha, pinned=settings.pinned,
-        forbidden=tuple(sorted(set(settings.forbidden) | set(analysis.lost_frames))),
-        progress=progress, time_limit_s=settings.key_time_limit_s,
-    )
-    alternates = None
-    if settings.switching:
-        alternates = propose_alternates(coords, selection.frames, theta=analysis.loop_angle)
-    return replace(analysis, settings=settings, selection=selection, alternate_frames=alternates)
+    return rekey(analysis, settings, progress=progress)
 
 
 class AnalysisController(QObject):
@@ -61,8 +53,8 @@ class AnalysisController(QObject):
         self._state = state
         self._runner = runner
         self._job: Job | None = None
-        self._asked: tuple[Silhouettes | None, AnalysisSettings] | None = None
-        self._analysed: Silhouettes | None = None  # silhouettes of state.analysis
+        self._asked: tuple[Silhouettes | None, AnalysisSettings, tuple] | None = None
+        self._analysed: tuple | None = None  # silhouettes and trim of state.analysis
         self._timer = QTimer(self, singleShot=True, interval=_COALESCE_MS)
         self._timer.timeout.connect(self._start)
         state.projectChanged.connect(self._on_project)
@@ -74,8 +66,8 @@ class AnalysisController(QObject):
         return self._timer.isActive() or self._job is not None
 
     def _on_project(self, project: Project) -> None:
-        wanted = (project.silhouettes, project.settings)
-        if self._asked is not None and wanted[0] is self._asked[0] and wanted[1] == self._asked[1]:
+        wanted = (project.silhouettes, project.settings, project.trim)
+        if self._asked is not None and wanted[0] is self._asked[0] and wanted[1:] == self._asked[1:]:
             return
         self._asked = wanted
         if project.silhouettes is None:
@@ -95,26 +87,27 @@ class AnalysisController(QObject):
     def _start(self) -> None:
         if self._job is not None:
             self._job.cancel()
-        silhouettes, settings = self._asked
+        silhouettes, settings, trim = self._asked
         current = self._state.analysis
-        if current is not None and self._analysed is silhouettes and (
-                current.settings.max_side_px == settings.max_side_px):
+        if current is not None and self._analysed is not None and (
+                self._analysed[0] is silhouettes and self._analysed[1] == trim
+                and current.settings.max_side_px == settings.max_side_px):
             job = Job(lambda progress: reselect(current, settings, progress), "Choosing key-images",
                       unit=None)
         else:
-            job = Job(lambda progress: analyze(silhouettes, settings, progress),
+            job = Job(lambda progress: analyze(silhouettes, settings, trim, progress),
                       "Analysing the clip", unit=None)
-        job.succeeded.connect(lambda result, j=job, s=silhouettes: self._done(j, s, result))
+        job.succeeded.connect(lambda result, j=job, s=(silhouettes, trim): self._done(j, s, result))
         job.failed.connect(lambda message, j=job: self._failed(j, message))
         job.cancelled.connect(lambda j=job: self._finished(j))
         self._job = job
         ProgressDialog(job, self.parent())  # shows itself only past 300 ms
         self._runner.start(job)
 
-    def _done(self, job: Job, silhouettes: Silhouettes, analysis: Analysis) -> None:
+    def _done(self, job: Job, analysed: tuple, analysis: Analysis) -> None:
         if job is self._job:
             self._job = None
-            self._analysed = silhouettes
+            self._analysed = analysed
             self._state.set_analysis(analysis)
 
     def _failed(self, job: Job, message: str) -> None:

@@ -37,14 +37,16 @@ class Animation:
     Attributes
     ----------
     curves : ndarray of shape (n, k)
-        A pose per clip frame, laid out as ``skeleton.channel_names``.
+        A pose per analysed frame (the trim), laid out as ``skeleton.channel_names``.
     weights : InterpolationWeights
     options : AnimationOptions
     skeleton : Skeleton
     cycle_start : int
-        First clip frame of the loop cycle (0 without ``options.loop``).
+        Row of ``curves`` where the loop cycle starts (0 without ``options.loop``).
     cycle : ndarray of shape (P, k) or None
         The loop cycle when ``options.loop``.
+    first_frame : int
+        Source frame of row 0 of ``curves`` (the start of the trim).
     """
 
     curves: np.ndarray
@@ -53,18 +55,22 @@ class Animation:
     skeleton: Skeleton
     cycle_start: int = 0
     cycle: np.ndarray | None = None
+    first_frame: int = 0
 
     def pose_at(self, frame: int) -> np.ndarray:
-        """The pose shown at clip frame ``frame`` (the loop repeats in step with the clip)."""
+        """The pose shown at source frame ``frame`` (the loop repeats in step with the clip;
+        outside the trim, the nearest end's pose)."""
+        row = frame - self.first_frame
         if self.cycle is not None:
-            return self.cycle[(frame - self.cycle_start) % len(self.cycle)]
-        return self.curves[min(max(frame, 0), len(self.curves) - 1)]
+            return self.cycle[(row - self.cycle_start) % len(self.cycle)]
+        return self.curves[min(max(row, 0), len(self.curves) - 1)]
 
     def exported(self) -> tuple[np.ndarray, np.ndarray]:
-        """Frame numbers and poses to export: every clip frame, or the cycle from 0."""
+        """Source frame numbers and poses to export: every analysed frame, or the cycle
+        numbered from 0."""
         if self.cycle is not None:
             return np.arange(len(self.cycle)), self.cycle
-        return np.arange(len(self.curves)), self.curves
+        return self.first_frame + np.arange(len(self.curves)), self.curves
 
 
 def missing_message(missing: tuple[int, ...]) -> str:
@@ -85,10 +91,11 @@ def compute_animation(project: Project, analysis: Analysis | None, skeleton: Ske
     missing = missing_poses(project, analysis, skeleton.n_channels)
     if missing:
         raise GaitInputError(missing_message(missing))
-    record = analysis_record(analysis)
-    alternates = alternates_in_use(project, analysis) or None
+    record = analysis_record(analysis)  # frames in rows of the analysed range
+    first = record.first_frame
+    alternates = tuple(f - first for f in alternates_in_use(project, analysis)) or None
     posed = tuple(record.key_frames) + tuple(alternates or ())
-    poses = {f: np.asarray(project.key_poses[f], dtype=float) for f in posed}
+    poses = {f: np.asarray(project.key_poses[f + first], dtype=float) for f in posed}
     coords = record.filtered_projections if options.filtered else record.projections
     clamp = CLAMP_RANGE if options.clamp else None
     kwargs = dict(alternate_frames=alternates, theta=record.loop_angle, alpha=record.alpha, clamp=clamp)
@@ -97,7 +104,7 @@ def compute_animation(project: Project, analysis: Analysis | None, skeleton: Ske
     start, cycle = 0, None
     if options.loop:
         start, cycle = loop_cycle(curves, analysis.diagnosis.period_frames)
-    return Animation(curves, weights, options, skeleton, start, cycle)
+    return Animation(curves, weights, options, skeleton, start, cycle, first)
 
 
 class AnimationController(QObject):

@@ -35,11 +35,11 @@ def silhouettes_from_masks(folder: Path, progress) -> Silhouettes:
 
 
 def open_source(project: Project) -> FrameSource | None:
-    """The footage of ``project`` (None when it has none)."""
+    """The footage of ``project``, whole (the trim only limits the analysis); None when it
+    has none."""
     if project.footage is None:
         return None
-    return open_frames(project.footage, start=project.frame_start, stop=project.frame_stop,
-                       fps=project.fps)
+    return open_frames(project.footage, fps=project.fps)
 
 
 class DocumentController(QObject):
@@ -83,6 +83,8 @@ class DocumentController(QObject):
             return False
         self._state.open(project, None, source)
         self._add_recent(path)
+        if source is not None and source.note:
+            self.messageRaised.emit(source.note)
         if masks:
             self.run(Job(lambda progress: silhouettes_from_masks(path, progress),
                          "Tracking the masks"), lambda sil: self._set_initial_silhouettes(project, sil))

@@ -27,9 +27,8 @@ KINDS = {".csv": "Curves CSV", ".bvh": "BVH", ".glb": "glTF (.glb)", VIDEO: "Pre
 
 
 def export_fps(state: AppState) -> float:
-    """Frame rate of the clip: the footage's, the project's, else 24."""
-    source = state.source
-    return float((source.fps if source is not None else None) or state.project.fps or DEFAULT_FPS)
+    """Frame rate of the clip: the project's, the footage's, else 24."""
+    return float(state.fps or DEFAULT_FPS)
 
 
 class ExportController(QObject):
@@ -76,7 +75,7 @@ class ExportController(QObject):
     def _footage_frames(self, animation):
         """An iterator over the frames the exported poses go with, read on the job's thread."""
         project = self._state.project
-        start = animation.cycle_start if animation.cycle is not None else 0
+        start = animation.first_frame + (animation.cycle_start if animation.cycle is not None else 0)
         count = len(animation.exported()[0])
 
         def frames():

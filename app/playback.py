@@ -7,6 +7,7 @@ from PySide6.QtCore import QObject, QTimer
 from app.state import AppState
 
 DEFAULT_FPS = 25.0
+"""Playback rate of a clip whose frame rate nobody knows (an image folder, unless set)."""
 
 
 class Player(QObject):
@@ -28,8 +29,7 @@ class Player(QObject):
         if self.playing:
             self.stop()
         elif self._state.n_frames > 1:
-            source = self._state.source
-            fps = (source.fps if source is not None else None) or self._state.project.fps or DEFAULT_FPS
+            fps = self._state.fps or DEFAULT_FPS
             self._timer.start(max(1, round(1000 / fps)))
 
     def stop(self, *_changed) -> None:

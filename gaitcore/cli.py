@@ -134,10 +134,10 @@ def _run_analyze(args: argparse.Namespace) -> int:
         print("variance: " + " ".join(f"{100 * v:.1f}%" for v in analysis.pca.variance_ratio))
         print("r per PC: " + " ".join(f"{r:.2f}" for r in d.correlations))
         print(f"period: {d.period_frames:.1f} frames; verdict: {d.verdict.value}: {d.reason}")
-        print(f"key-images: {[f + start for f in sel.frames]} (cond {sel.condition_number:.3g}, "
+        print(f"key-images: {list(analysis.key_frames)} (cond {sel.condition_number:.3g}, "
               f"{'proven optimal' if sel.exact else 'not proven optimal'})")
         if analysis.alternate_frames is not None:
-            print(f"alternates: {[f + start for f in analysis.alternate_frames]}")
+            print(f"alternates: {list(analysis.alternate_frames)}")
         if analysis.alternates_note:
             print(analysis.alternates_note)
         for c in analysis.cycles:

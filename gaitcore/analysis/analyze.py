@@ -5,9 +5,10 @@
 the whole clip and advice that names what stands in the way. ``rekey`` redoes the keys only.
 
 Frames: the silhouettes given start at source frame ``first_frame``; a trim (``frame_range``,
-source frames) restricts the analysis to part of them. Inside an :class:`Analysis`, frames are
-rows of the analysed range (0-based); ``Analysis.first_frame`` maps them back to the source.
-Settings (pinned, forbidden frames) are in source frames, as the artist sees them.
+source frames) restricts the analysis to part of them. An :class:`Analysis` names frames by
+their source numbers (keys, alternates, lost frames, as the artist sees them and as settings
+give them); its arrays have one row per analysed frame, row 0 being ``first_frame``
+(``Analysis.rows`` converts).
 """
 
 from __future__ import annotations
@@ -88,15 +89,17 @@ class Analysis:
     pca : ImagePCA
         Fitted on the frames where the subject was found.
     projections : ndarray of shape (n, C)
-        Normalized PCA coordinates of every frame (C = min(5, available) components); lost
-        frames are interpolated in time and listed in ``lost_frames``.
+        Normalized PCA coordinates of every analysed frame (C = min(5, available)
+        components); lost frames are interpolated in time and listed in ``lost_frames``.
     lost_frames : tuple of int
+        Source frames.
     diagnosis : Diagnosis
     selection : KeySelection
+        The key search, in rows (``key_frames`` gives source frames).
     loop_angle : ndarray of shape (n,)
         Unwrapped angle around the (PC1, PC2) loop of the filtered trajectory.
     alternate_frames : tuple of int or None
-        One per key, in key order, when switching is on and every key has one.
+        Source frames, one per key, in key order, when switching is on and every key has one.
     alternates_note : str or None
         Why no alternates are proposed although switching is on, or a warning about them.
     first_frame : int
@@ -135,7 +138,12 @@ class Analysis:
 
     @property
     def key_frames(self) -> tuple[int, ...]:
-        return self.selection.frames
+        """Source frames of the key-images, sorted."""
+        return tuple(f + self.first_frame for f in self.selection.frames)
+
+    def rows(self, frames: tuple[int, ...] | list[int]) -> list[int]:
+        """Rows of the arrays for source ``frames`` (which must lie in :attr:`frame_range`)."""
+        return [int(f) - self.first_frame for f in frames]
 
     @property
     def posed_frames(self) -> tuple[int, ...]:
@@ -225,7 +233,7 @@ def analyze_silhouettes(
         settings=settings,
         pca=pca,
         projections=proj,
-        lost_frames=tuple(int(t) for t in np.nonzero(roi.lost)[0]),
+        lost_frames=tuple(int(t) + first_frame + start for t in np.nonzero(roi.lost)[0]),
         diagnosis=diagnosis,
         selection=KeySelection(frames=(), condition_number=float("nan"), exact=False, nodes_visited=0),
         loop_angle=theta,
@@ -311,15 +319,16 @@ def rekey(
         settings.keys,
         alpha=settings.alpha,
         pinned=_rows(settings.pinned, analysis),
-        forbidden=tuple(sorted(set(_rows(settings.forbidden, analysis)) | set(analysis.lost_frames))),
+        forbidden=_rows(settings.forbidden + analysis.lost_frames, analysis),
         progress=progress,
         time_limit_s=settings.key_time_limit_s,
     )
     alternates, note = None, None
     if settings.switching:
         try:
-            alternates = propose_alternates(coords, selection.frames, theta=analysis.loop_angle,
-                                            period_frames=analysis.diagnosis.period_frames)
+            rows = propose_alternates(coords, selection.frames, theta=analysis.loop_angle,
+                                      period_frames=analysis.diagnosis.period_frames)
+            alternates = tuple(r + analysis.first_frame for r in rows)
         except GaitInputError as exc:
             note = f"No alternates: {exc}."
     return replace(analysis, settings=settings, selection=selection, alternate_frames=alternates,
@@ -327,6 +336,6 @@ def rekey(
 
 
 def _rows(frames: tuple[int, ...], analysis: Analysis) -> tuple[int, ...]:
-    """Source frames that lie in the analysed range, as its rows."""
+    """Source frames that lie in the analysed range, as its rows (sorted, once each)."""
     start, stop = analysis.frame_range
-    return tuple(f - start for f in frames if start <= f < stop)
+    return tuple(sorted({f - start for f in frames if start <= f < stop}))

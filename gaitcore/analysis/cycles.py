@@ -211,13 +211,14 @@ def _features(images: np.ndarray, lost: np.ndarray, side: int) -> np.ndarray:
     return out
 
 
-def _window_diagnosis(f: np.ndarray, a: int, b: int):
-    """The paper's diagnosis of frames a..b-1 with their own PCA; None when it cannot run."""
+def _window_diagnosis(f: np.ndarray, a: int, b: int, progress: Progress | None = None):
+    """The paper's diagnosis of frames a..b-1 with their own PCA; None when it cannot run.
+    ``progress`` is passed to the PCA, so that a cancel stops it mid-way."""
     block = f[a:b]
     if np.isnan(block).any():
         return None
     try:
-        pca = ImagePCA.fit(block.reshape(b - a, 1, -1), n_components=5)
+        pca = ImagePCA.fit(block.reshape(b - a, 1, -1), n_components=5, progress=progress)
         if pca.n_components < 2:
             return None
         return diagnose(pca.projections)
@@ -241,7 +242,8 @@ def _scan(f: np.ndarray, settings: CycleSettings,
     found, periods = [], []
     for k, (a, b) in enumerate(plan):
         report(progress, k, len(plan), "cycle search cancelled")
-        d = _window_diagnosis(f, a, b)
+        again = None if progress is None else (lambda _d, _t, k=k: progress(k, len(plan)))
+        d = _window_diagnosis(f, a, b, again)
         if d is None or b - a < 2 * d.period_frames or d.periodicity_p > PERIODICITY_ALPHA:
             continue
         periods.append(d.period_frames)

@@ -48,10 +48,10 @@ def analysis_to_dict(analysis: Analysis, *, source: str = "", fps: float | None 
         "period_s": None if not fps else float(d.period_frames / fps),
         "f0": float(d.f0),
         "band": [float(b) for b in d.band],
-        "key_frames": [int(f) + first for f in analysis.key_frames],
+        "key_frames": [int(f) for f in analysis.key_frames],
         "condition_number": float(analysis.selection.condition_number),
         "exact": bool(analysis.selection.exact),
-        "lost_frames": [int(f) + first for f in analysis.lost_frames],
+        "lost_frames": [int(f) for f in analysis.lost_frames],
         "cycles": [c.to_dict(analysis.cycle_offset) for c in analysis.cycles],
         "advice": None if analysis.advice is None else analysis.advice.to_dict(),
         "projections": np.round(analysis.coords, 10).tolist(),
@@ -59,7 +59,7 @@ def analysis_to_dict(analysis: Analysis, *, source: str = "", fps: float | None 
         "loop_angle": np.round(analysis.loop_angle, 10).tolist(),
     }
     if analysis.alternate_frames is not None:
-        out["alternate_frames"] = [int(f) + first for f in analysis.alternate_frames]
+        out["alternate_frames"] = [int(f) for f in analysis.alternate_frames]
     if analysis.alternates_note is not None:
         out["alternates_note"] = analysis.alternates_note
     return out

@@ -65,6 +65,7 @@ class ScriptedAsker(Asker):
         self.next_export_path: Path | None = None
         self.confirm_answer = True
         self.chosen_frame: int | None = None
+        self.frame_rate_answer: float | None = None
         self.asked: list[str] = []
 
     def error(self, title: str, message: str) -> None:
@@ -100,6 +101,10 @@ class ScriptedAsker(Asker):
     def confirm(self, title: str, message: str) -> bool:
         self.asked.append(f"{title}: {message}")
         return self.confirm_answer
+
+    def frame_rate(self, current: float | None) -> float | None:
+        self.asked.append("frame rate")
+        return self.frame_rate_answer
 
     def choose_frame(self, title: str, frames: list[int]) -> int | None:
         self.asked.append(title)
