@@ -34,7 +34,7 @@ from app.commands import FootageFitCommand
 from app.posing import PosingController
 from app.state import AppState
 from app.widgets.follow import show_value
-from app.widgets.reference_plane import (
+from gaitcore.project.footage_fit import (
     SkeletonExtent,
     reference_image,
     silhouette_height_px,

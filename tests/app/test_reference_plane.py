@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.widgets.reference_plane import reference_image, skeleton_extent
+from gaitcore.project.footage_fit import reference_image, skeleton_extent
 from gaitcore.project.document import FootageFit, Silhouettes
 from gaitcore.rig.skeleton import load_template
 from gaitcore.silhouettes.tracking import crop_rois

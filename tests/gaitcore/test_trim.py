@@ -65,3 +65,23 @@ def test_bvh_frame_time_has_ten_significant_digits(tmp_path):
     write_bvh(tmp_path / "a.bvh", skeleton, table, fps=29.97)
     line = next(s for s in (tmp_path / "a.bvh").read_text().splitlines() if s.startswith("Frame Time"))
     assert line == "Frame Time: 0.03336670003"
+
+
+def test_a_video_whose_header_claims_too_many_frames_is_analysed_whole(tmp_path):
+    import cv2
+
+    from tests.gaitcore.test_frames import _claim_frames
+
+    clip = walker_clip(72)
+    path = tmp_path / "walker.avi"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 24.0, clip.shape[2:0:-1])
+    for m in clip:
+        writer.write(cv2.cvtColor(m, cv2.COLOR_GRAY2BGR))
+    writer.release()
+    _claim_frames(path, 90)
+    out = tmp_path / "out"
+    assert main(["analyze", str(path), "--out", str(out), "--subject", "70,35,60,30",
+                 "--background", "0,0,40,20", "--key-time-limit", "5"]) == 0
+    data = json.loads((out / "analysis.json").read_text())
+    assert data["n_frames"] == 72 and data["fps"] == 24.0
+    assert len(list((out / "masks").glob("*.png"))) == 72
