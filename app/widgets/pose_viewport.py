@@ -34,15 +34,15 @@ from app.commands import FootageFitCommand
 from app.posing import PosingController
 from app.state import AppState
 from app.widgets.follow import show_value
+from app.widgets.skeleton_gl import SkeletonGLView, opengl_available
+from app.workers import FrameLoader
+from gaitcore.project.document import FootageFit, Silhouettes
 from gaitcore.project.footage_fit import (
     SkeletonExtent,
     reference_image,
     silhouette_height_px,
     skeleton_extent,
 )
-from app.widgets.skeleton_gl import SkeletonGLView, opengl_available
-from app.workers import FrameLoader
-from gaitcore.project.document import FootageFit, Silhouettes
 from gaitcore.rig.skeleton import Skeleton
 
 VIEW_MARGIN = 1.35

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gaitcore.project.footage_fit import reference_image, skeleton_extent
 from gaitcore.project.document import FootageFit, Silhouettes
+from gaitcore.project.footage_fit import reference_image, skeleton_extent
 from gaitcore.rig.skeleton import load_template
 from gaitcore.silhouettes.tracking import crop_rois
 from tests.gaitcore.walker import walker_clip
