@@ -18,6 +18,7 @@ from PySide6.QtCore import QObject, QTimer, Signal
 from app.commands import AnimationOptionsCommand
 from app.posing import alternates_in_use, missing_poses
 from app.state import AppState
+from gaitcore.analysis.alternates import swap_warning
 from gaitcore.analysis.analyze import Analysis
 from gaitcore.animation.animate import animate
 from gaitcore.animation.weights import InterpolationWeights, interpolation_weights, loop_cycle
@@ -71,6 +72,16 @@ class Animation:
         if self.cycle is not None:
             return np.arange(len(self.cycle)), self.cycle
         return self.first_frame + np.arange(len(self.curves)), self.curves
+
+
+def swap_warning_for(project: Project, analysis: Analysis | None) -> str | None:
+    """The warning of :func:`gaitcore.analysis.alternates.swap_warning` for the alternates the
+    artist accepted (None when switching is off or they are fine)."""
+    alternates = alternates_in_use(project, analysis)
+    if analysis is None or not alternates:
+        return None
+    return swap_warning(analysis.loop_angle, analysis.rows(analysis.key_frames),
+                        analysis.rows(alternates))
 
 
 def missing_message(missing: tuple[int, ...]) -> str:
@@ -171,7 +182,10 @@ class AnimationController(QObject):
             status = f"animated {len(animation.curves)} frames from {n_posed} posed frames"
             if animation.cycle is not None:
                 status += (f"; loop of {len(animation.cycle)} frames from frame "
-                           f"{animation.cycle_start}")
+                           f"{animation.first_frame + animation.cycle_start}")
+            warning = swap_warning_for(state.project, state.analysis)
+            if warning:
+                status += f". Warning: {warning}"
         self._animation = animation
         self._status = status
         self.animationChanged.emit(animation)

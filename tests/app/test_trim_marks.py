@@ -81,3 +81,19 @@ def test_frame_rate_of_an_image_folder_is_set_undone_and_drives_playback(qtbot, 
     window.player.stop()
     state.undo_stack.undo()
     assert state.fps is None
+
+
+def test_alternates_beside_their_keys_earn_a_warning(qtbot, window, tmp_path):
+    from dataclasses import replace
+
+    from app.animation import swap_warning_for
+
+    assert window.open_path(stand_walk_stand(tmp_path / "masks"))
+    qtbot.waitUntil(lambda: window.state.analysis is not None, timeout=60_000)
+    wait_ready(qtbot, window, 60_000)
+    state = window.state
+    project = replace(state.project, settings=replace(state.project.settings, switching=True))
+    analysis = state.analysis
+    beside = tuple(k + 1 for k in analysis.key_frames)
+    assert "swaps left and right" in swap_warning_for(replace(project, alternates=beside), analysis)
+    assert swap_warning_for(project, analysis) is None  # no alternates accepted: nothing to say
