@@ -222,12 +222,7 @@ def _run_animate(args: argparse.Namespace) -> int:
             + (f", alternates {[f + first for f in alternates]}" if alternates else "")
             + ")"
         )
-    if alternates:
-        from gaitcore.analysis.alternates import swap_warning
-
-        warning = swap_warning(record.loop_angle, record.key_frames, alternates)
-        if warning:
-            print(f"gaitcore: warning: {warning}", file=sys.stderr)
+    _warn_swaps(record, alternates)
     coords = record.filtered_projections if args.filtered else record.projections
     curves = animate(
         coords,
@@ -246,6 +241,15 @@ def _run_animate(args: argparse.Namespace) -> int:
         print(f"wrote {path} ({skeleton.n_joints} joints, {record.n_frames} frames "
               f"at {fps:g} fps)")
     return 0
+
+
+def _warn_swaps(record, alternates: tuple[int, ...] | None) -> None:
+    """Warn (stderr) when the alternates swap left and right faster than the gait."""
+    from gaitcore.analysis.alternates import swap_warning
+
+    warning = alternates and swap_warning(record.loop_angle, record.key_frames, alternates)
+    if warning:
+        print(f"gaitcore: warning: {warning}", file=sys.stderr)
 
 
 def _int_list(text: str) -> tuple[int, ...]:

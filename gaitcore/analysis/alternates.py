@@ -82,24 +82,11 @@ def propose_alternates(
     """
     p = np.asarray(projections, dtype=float)
     n = p.shape[0]
-    frames = np.arange(n)
-    use_phase = theta is not None and theta[-1] - theta[0] >= 2 * TWO_PI
-    reach = 0.25 if period_frames is not None else 0.5
     out = []
     for k in key_frames:
         if not 0 <= k < n:
             raise GaitInputError(f"key frame {k} is outside the clip (0..{n - 1})")
-        ok = np.abs(frames - k) >= min_gap
-        if period_frames is not None:
-            periods = np.abs(frames - k) / float(period_frames)
-            ok &= np.abs(np.mod(periods - 1.0, 2.0) - 1.0) >= 1.0 - reach  # odd, +- a quarter
-        if use_phase:
-            # Turns of the loop between each frame and the key, modulo a gait cycle (2 turns):
-            # about 1 in the other half-cycle, about 0 or 2 for the same pose a cycle away.
-            turns = np.mod((theta - theta[k]) / TWO_PI, 2.0)
-            other_half = np.abs(turns - 1.0) <= reach
-            if period_frames is not None or np.any(ok & other_half):
-                ok &= other_half
+        ok = _candidates(n, k, min_gap, theta, period_frames)
         if not ok.any():
             where = (f"about {period_frames:.0f} frames (half a stride) from key {k}"
                      if period_frames is not None else f"{min_gap} or more frames from key {k}")
@@ -110,6 +97,24 @@ def propose_alternates(
         d = np.where(ok, ((p - p[k]) ** 2).sum(axis=1), np.inf)
         out.append(int(np.argmin(d)))
     return tuple(out)
+
+
+def _candidates(n: int, k: int, min_gap: int, theta: np.ndarray | None,
+                period_frames: float | None) -> np.ndarray:
+    """Frames allowed as key ``k``'s alternate, shape (n,) bool (see propose_alternates)."""
+    frames = np.arange(n)
+    reach = 0.25 if period_frames is not None else 0.5
+    ok = np.abs(frames - k) >= min_gap
+    if period_frames is not None:
+        periods = np.abs(frames - k) / float(period_frames)
+        ok &= np.abs(np.mod(periods - 1.0, 2.0) - 1.0) >= 1.0 - reach  # odd, +- a quarter
+    if theta is not None and theta[-1] - theta[0] >= 2 * TWO_PI:
+        # Turns of the loop between each frame and the key, modulo a gait cycle (2 turns):
+        # about 1 in the other half-cycle, about 0 or 2 for the same pose a cycle away.
+        other_half = np.abs(np.mod((theta - theta[k]) / TWO_PI, 2.0) - 1.0) <= reach
+        if period_frames is not None or np.any(ok & other_half):
+            ok &= other_half
+    return ok
 
 
 def left_right_swaps(theta: np.ndarray, key_frames: tuple[int, ...] | list[int],

@@ -201,25 +201,17 @@ def analyze_silhouettes(
     sketched : bool
         The silhouettes come from sketches (changes the advice of an unusable diagnosis).
     progress : callable(done, total) -> bool, optional
-        Reports the cycle search, the PCA (one pass per crop placement) and the key search
-        as equal stages; returning False cancels with ``InterruptedError``.
+        Reports the cycle search, the PCA (per crop placement) and the key search as equal
+        stages; returning False cancels with ``InterruptedError``.
 
     Raises
     ------
     GaitInputError
-        A trim outside the silhouettes, too few frames for the requested keys, no motion,
-        too few distinct silhouettes.
+        A trim outside the silhouettes, too few frames for the keys, no motion.
     """
     start, stop = _trim(frame_range, first_frame, roi.crops.shape[0])
-    whole = roi
-    roi = replace(roi, crops=roi.crops[start:stop], centers_xy=roi.centers_xy[start:stop],
-                  lost=roi.lost[start:stop])
-    found = np.nonzero(~roi.lost)[0]
-    if found.size < max(settings.keys, 2) + 1:
-        raise GaitInputError(
-            f"only {found.size} frame(s) with a subject for {settings.keys} key-images; "
-            "use a longer clip or fewer keys"
-        )
+    whole, roi = roi, _slice(roi, start, stop)
+    _check_found(roi, settings)
     stages = 4 if settings.stabilize_roi else 3
     cycles = find_cycles(whole, progress=_stage(progress, 0, stages))
     pca, proj, diagnosis = _describe(roi, settings, sketched, _stage(progress, 1, stages))
@@ -243,6 +235,18 @@ def analyze_silhouettes(
         advice=advise(roi, diagnosis, cycles, first_frame=first_frame, sketched=sketched),
     )
     return rekey(motion, settings, progress=_stage(progress, stages - 1, stages))
+
+
+def _check_found(roi: RoiClip, settings: AnalysisSettings) -> None:
+    found = int(np.count_nonzero(~roi.lost))
+    if found < max(settings.keys, 2) + 1:
+        raise GaitInputError(f"only {found} frame(s) with a subject for {settings.keys} "
+                             "key-images; use a longer clip or fewer keys")
+
+
+def _slice(roi: RoiClip, start: int, stop: int) -> RoiClip:
+    return replace(roi, crops=roi.crops[start:stop], centers_xy=roi.centers_xy[start:stop],
+                   lost=roi.lost[start:stop])
 
 
 def _trim(frame_range: tuple[int, int | None] | None, first_frame: int, n: int) -> tuple[int, int]:

@@ -162,9 +162,9 @@ def write_preview_video(path: str | Path, footage_frames: Iterable[np.ndarray],
         (:func:`gaitcore.project.footage_fit.footage_from_world`). Without it, no skeleton
         is drawn over the footage.
     view_height_m : float, optional
-        World height seen by the side view; by default 1.4 times the skeleton's rest height.
+        World height of the side view; by default 1.4 times the skeleton's rest height.
     progress : callable (done, total) -> bool, optional
-        Called before each frame and at the end; returning False cancels.
+        Called before each frame and at the end; False cancels.
 
     Returns
     -------
@@ -192,33 +192,27 @@ def write_preview_video(path: str | Path, footage_frames: Iterable[np.ndarray],
     frames = iter(footage_frames)
     first = next(frames, None)
     if first is None:
-        raise GaitInputError(f"the footage has 0 frames but there are {len(p)} poses; give the "
-                             "clip the animation was made from")
-    first = _as_bgr(first)
-    height, width = first.shape[:2]
+        raise GaitInputError(f"the footage has no frames for the {len(p)} poses; give the clip")
+    return _encode(Path(path), first, frames, skeleton, world, fps, footage_from_world,
+                   view_height_m, progress)
+
+
+def _encode(path: Path, first: np.ndarray, frames, skeleton: Skeleton, world: np.ndarray,
+            fps: float, maps: np.ndarray | None, view_height_m: float,
+            progress: Progress | None) -> PreviewVideo:
+    """Render and write every frame of the preview (see :func:`write_preview_video`)."""
+    n = len(world)
+    height, width = _as_bgr(first).shape[:2]
     side = (max(16, round(height * 4 / 3)), max(16, height))
     renderer = _side_renderer(skeleton, side, view_height_m)
     try:
-        writer, used, note = _open_writer(Path(path), fps, (width + side[0], height))
+        writer, used, note = _open_writer(path, fps, (width + side[0], height))
         try:
-            image: np.ndarray | None = first
-            for done in range(len(p)):
-                report(progress, done, len(p), f"preview video cancelled at frame {done} of {len(p)}")
-                if image is None:
-                    raise GaitInputError(f"the footage has {done} frames but there are {len(p)} "
-                                         "poses; give the clip the animation was made from")
-                view = _as_bgr(image).copy()
-                if view.shape[:2] != (height, width):
-                    raise GaitInputError(f"footage frame {done} is {view.shape[1]}x{view.shape[0]} "
-                                         f"but the first is {width}x{height}: give frames of one size")
-                if footage_from_world is not None:
-                    _draw_skeleton(view, skeleton, world[done], footage_from_world[done])
-                rgb, _ = renderer.render_world(world[done])
-                panel = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
-                cv2.putText(panel, f"frame {done}", (6, side[1] - 8), cv2.FONT_HERSHEY_SIMPLEX,
-                            0.4, (30, 30, 30), 1, cv2.LINE_AA)
-                writer.write(np.hstack([view, panel]))
-                image = next(frames, None) if done + 1 < len(p) else None
+            for done, image in enumerate(_paired(first, frames, n)):
+                report(progress, done, n, f"preview video cancelled at frame {done} of {n}")
+                affine = None if maps is None else maps[done]
+                writer.write(_preview_frame(image, done, skeleton, world[done], affine, renderer,
+                                            (width, height)))
         except BaseException:
             writer.release()
             used[0].unlink(missing_ok=True)
@@ -227,8 +221,35 @@ def write_preview_video(path: str | Path, footage_frames: Iterable[np.ndarray],
     finally:
         renderer.close()
     if progress is not None:
-        progress(len(p), len(p))
-    return PreviewVideo(used[0], used[1], len(p), note)
+        progress(n, n)
+    return PreviewVideo(used[0], used[1], n, note)
+
+
+def _paired(first: np.ndarray, rest, n: int):
+    """The first ``n`` footage frames; a shorter footage raises when it runs out."""
+    image = first
+    for done in range(n):
+        if image is None:
+            raise GaitInputError(f"the footage has {done} frames but there are {n} poses; give "
+                                 "the clip the animation was made from")
+        yield image
+        image = next(rest, None) if done + 1 < n else None
+
+
+def _preview_frame(image: np.ndarray, index: int, skeleton: Skeleton, world: np.ndarray,
+                   affine: np.ndarray | None, renderer, size: tuple[int, int]) -> np.ndarray:
+    """One frame of the preview: the footage with the skeleton over it, the side view beside."""
+    view = _as_bgr(image).copy()
+    if (view.shape[1], view.shape[0]) != size:
+        raise GaitInputError(f"footage frame {index} is {view.shape[1]}x{view.shape[0]} but the "
+                             f"first is {size[0]}x{size[1]}: give frames of one size")
+    if affine is not None:
+        _draw_skeleton(view, skeleton, world, affine)
+    rgb, _ = renderer.render_world(world)
+    panel = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
+    cv2.putText(panel, f"frame {index}", (6, panel.shape[0] - 8), cv2.FONT_HERSHEY_SIMPLEX,
+                0.4, (30, 30, 30), 1, cv2.LINE_AA)
+    return np.hstack([view, panel])
 
 
 BONE_COLOUR = (0, 200, 255)
