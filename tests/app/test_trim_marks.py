@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from PySide6.QtCore import QPoint, Qt
 
 from tests.app.conftest import wait_ready
@@ -97,3 +98,43 @@ def test_alternates_beside_their_keys_earn_a_warning(qtbot, window, tmp_path):
     beside = tuple(k + 1 for k in analysis.key_frames)
     assert "swaps left and right" in swap_warning_for(replace(project, alternates=beside), analysis)
     assert swap_warning_for(project, analysis) is None  # no alternates accepted: nothing to say
+
+
+def test_a_video_whose_header_disagrees_opens_whole_with_a_note(qtbot, window, tmp_path):
+    from tests.gaitcore.test_frames import _claim_frames, _write_30
+
+    path = _claim_frames(_write_30(tmp_path / "clip.avi"), 40)
+    assert window.open_path(path)
+    assert window.state.n_frames == 30
+    assert "header says 40 frames but 30 decode" in window.statusBar().currentMessage()
+    window.state.set_frame(29)
+    qtbot.waitUntil(lambda: window.frame_view.shown_frame == 29)
+
+
+def test_a_trimmed_animation_exports_source_frames_at_the_clip_rate(qtbot, window, asker,
+                                                                   canter_clip, tmp_path):
+    from app.commands import TrimCommand
+    from gaitcore.io.pose_table import read_pose_table
+    from tests.app.posing_helpers import open_demo, true_poses
+
+    open_demo(qtbot, window, canter_clip)
+    state = window.state
+    state.undo_stack.push(TrimCommand(state, 20, 80))
+    qtbot.waitUntil(lambda: state.analysis is not None and state.analysis.frame_range == (20, 80),
+                    timeout=60_000)
+    truth = true_poses(state.skeleton)
+    for k in state.analysis.key_frames:
+        state.set_frame(k)
+        window.posing.set_pose(truth[k], "set pose")
+    qtbot.waitUntil(lambda: window.animator.animation is not None, timeout=20_000)
+    animation = window.animator.animation
+    np.testing.assert_allclose(animation.pose_at(state.analysis.key_frames[0]),
+                               truth[state.analysis.key_frames[0]], atol=1e-9)
+    asker.next_export_path = tmp_path / "curves.csv"
+    job = window.exporter.export(".csv")
+    with qtbot.waitSignal(job.finished, timeout=60_000):
+        pass
+    table = read_pose_table(tmp_path / "curves.csv")
+    np.testing.assert_array_equal(table.frames, np.arange(20, 80))
+    second = (tmp_path / "curves.csv").read_text().splitlines()[1].split(",")
+    assert second[0] == "20" and float(second[1]) == pytest.approx(20 / state.fps)
