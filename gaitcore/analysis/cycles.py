@@ -8,9 +8,10 @@ three steps:
    lengths (each window gets its own PCA). A window counts when it is usable (r1, r2 >= 0.6,
    a significant rhythm) and holds at least two of its periods. Crops centred on each
    frame's centre of mass jitter with the legs, which can hide PC2's rhythm: when windows
-   show a significant rhythm, the scan is run again on crops re-centred on the track
-   averaged over that period (:func:`gaitcore.silhouettes.tracking.stabilize_rois`), and the
-   scan that finds more steady gait is kept.
+   show a significant rhythm where none is usable, the scan is run again on crops re-centred
+   on the track averaged over that period
+   (:func:`gaitcore.silhouettes.tracking.stabilize_rois`), and the scan that finds more
+   steady gait is kept.
 2. *Groups*: overlapping counted windows whose periods agree within ``period_tolerance`` make
    one candidate stretch, with the median of their periods.
 3. *Ends*: a window is blunt at the ends of a stretch (a window holding some standing frames
@@ -140,14 +141,16 @@ def find_cycles(
     """
     f = _features(roi.crops, roi.lost, settings.feature_side_px)
     half = None if progress is None else (lambda d, t: progress(d, 2 * t))
-    windows, periods = _scan(f, settings, half)
-    if periods:
-        steady = stabilize_rois(roi, float(np.median(periods)))
+    windows, rhythmic = _scan(f, settings, half)
+    if _coverage(rhythmic) > _coverage(windows):  # some rhythm is not usable: re-centre
+        steady = stabilize_rois(roi, float(np.median([w[2] for w in rhythmic])))
         f2 = _features(steady.crops, roi.lost, settings.feature_side_px)
         rest = None if progress is None else (lambda d, t: progress(t + d, 2 * t))
         windows2, _ = _scan(f2, settings, rest)
         if _coverage(windows2) > _coverage(windows):
             f, windows = f2, windows2
+    if progress is not None:
+        progress(1, 1)  # the second scan may have been skipped
     groups = _group(windows, settings.period_tolerance)
     cycles = []
     taken = np.zeros(len(f), dtype=bool)
@@ -227,9 +230,10 @@ def _window_diagnosis(f: np.ndarray, a: int, b: int, progress: Progress | None =
 
 
 def _scan(f: np.ndarray, settings: CycleSettings,
-          progress: Progress | None) -> tuple[list[tuple[int, int, float]], list[float]]:
-    """Usable windows (start, stop, period), and the periods of every window that holds a
-    significant rhythm at least twice."""
+          progress: Progress | None) -> tuple[list[tuple[int, int, float]],
+                                              list[tuple[int, int, float]]]:
+    """Usable windows (start, stop, period), and every window (start, stop, period) that
+    holds a significant rhythm at least twice, usable or not."""
     n = len(f)
     plan = []
     for width in settings.windows:
@@ -239,19 +243,19 @@ def _scan(f: np.ndarray, settings: CycleSettings,
         plan += [(a, a + width) for a in starts + ([n - width] if starts[-1] != n - width else [])]
     if not plan and n >= 2 * MIN_FRAMES:
         plan = [(0, n)]  # a clip shorter than every window: one window over it all
-    found, periods = [], []
+    found, rhythmic = [], []
     for k, (a, b) in enumerate(plan):
         report(progress, k, len(plan), "cycle search cancelled")
         again = None if progress is None else (lambda _d, _t, k=k: progress(k, len(plan)))
         d = _window_diagnosis(f, a, b, again)
         if d is None or b - a < 2 * d.period_frames or d.periodicity_p > PERIODICITY_ALPHA:
             continue
-        periods.append(d.period_frames)
+        rhythmic.append((a, b, d.period_frames))
         if d.verdict is Verdict.USABLE:
             found.append((a, b, d.period_frames))
     if progress is not None:
         progress(len(plan), len(plan))
-    return found, periods
+    return found, rhythmic
 
 
 def _group(windows: list[tuple[int, int, float]], tolerance: float) -> list[tuple[int, int, float]]:
