@@ -28,8 +28,8 @@ class AnalysisController(QObject):
         self._state = state
         self._runner = runner
         self._job: Job | None = None
-        self._asked: tuple[Silhouettes | None, AnalysisSettings] | None = None
-        self._analysed: Silhouettes | None = None  # silhouettes of state.analysis
+        self._asked: tuple[Silhouettes | None, AnalysisSettings, tuple] | None = None
+        self._analysed: tuple | None = None  # silhouettes and trim of state.analysis
         self._timer = QTimer(self, singleShot=True, interval=_COALESCE_MS)
         self._timer.timeout.connect(self._start)
         state.projectChanged.connect(self._on_project)
@@ -41,8 +41,8 @@ class AnalysisController(QObject):
         return self._timer.isActive() or self._job is not None
 
     def _on_project(self, project: Project) -> None:
-        wanted = (project.silhouettes, project.settings)
-        if self._asked is not None and wanted[0] is self._asked[0] and wanted[1] == self._asked[1]:
+        wanted = (project.silhouettes, project.settings, project.trim)
+        if self._asked is not None and wanted[0] is self._asked[0] and wanted[1:] == self._asked[1:]:
             return
         self._asked = wanted
         if project.silhouettes is None:
@@ -62,26 +62,27 @@ class AnalysisController(QObject):
     def _start(self) -> None:
         if self._job is not None:
             self._job.cancel()
-        silhouettes, settings = self._asked
+        silhouettes, settings, trim = self._asked
         current = self._state.analysis
-        if current is not None and self._analysed is silhouettes and (
-                current.settings.max_side_px == settings.max_side_px):
+        if current is not None and self._analysed is not None and (
+                self._analysed[0] is silhouettes and self._analysed[1] == trim
+                and current.settings.max_side_px == settings.max_side_px):
             job = Job(lambda progress: rekey(current, settings, progress=progress), "Choosing key-images",
                       unit=None)
         else:
-            job = Job(lambda progress: analyze(silhouettes, settings, progress),
+            job = Job(lambda progress: analyze(silhouettes, settings, progress, trim=trim),
                       "Analysing the clip", unit=None)
-        job.succeeded.connect(lambda result, j=job, s=silhouettes: self._done(j, s, result))
+        job.succeeded.connect(lambda result, j=job, s=(silhouettes, trim): self._done(j, s, result))
         job.failed.connect(lambda message, j=job: self._failed(j, message))
         job.cancelled.connect(lambda j=job: self._finished(j))
         self._job = job
         ProgressDialog(job, self.parent())  # shows itself only past 300 ms
         self._runner.start(job)
 
-    def _done(self, job: Job, silhouettes: Silhouettes, analysis: Analysis) -> None:
+    def _done(self, job: Job, analysed: tuple, analysis: Analysis) -> None:
         if job is self._job:
             self._job = None
-            self._analysed = silhouettes
+            self._analysed = analysed
             self._state.set_analysis(analysis)
 
     def _failed(self, job: Job, message: str) -> None:

@@ -15,7 +15,7 @@ from app.commands import AnimationOptionsCommand
 from app.state import AppState
 from gaitcore.errors import GaitInputError
 from gaitcore.project.document import AnimationOptions
-from gaitcore.project.steps import Animation, animate_project
+from gaitcore.project.steps import Animation, animate_project, swap_warning_for
 
 _COALESCE_MS = 40
 
@@ -84,7 +84,10 @@ class AnimationController(QObject):
             status = f"animated {len(animation.curves)} frames from {n_posed} posed frames"
             if animation.cycle is not None:
                 status += (f"; loop of {len(animation.cycle)} frames from frame "
-                           f"{animation.cycle_start}")
+                           f"{animation.first_frame + animation.cycle_start}")
+            warning = swap_warning_for(state.project, state.analysis)
+            if warning:
+                status += f". Warning: {warning}"
         self._animation = animation
         self._status = status
         self.animationChanged.emit(animation)

@@ -160,6 +160,36 @@ class FootageFitCommand(_FieldCommand):
                          f"change footage {field_name}")
 
 
+class TrimCommand(ProjectCommand):
+    """Set the in and out marks: the source frames the analysis and the exports use."""
+
+    def __init__(self, state: AppState, start: int, stop: int | None, text: str = "trim") -> None:
+        super().__init__(state, state.project.with_trim(start, stop), text)
+
+
+def set_in_mark(state: AppState) -> None:
+    """Start the trim at the current frame (I); an out mark before it is dropped."""
+    frame, stop = state.frame, state.project.frame_stop
+    state.undo_stack.push(TrimCommand(state, frame, stop if stop is not None and stop > frame else None,
+                                      f"set the in mark at frame {frame}"))
+
+
+def set_out_mark(state: AppState) -> None:
+    """End the trim at the current frame, included (O); an in mark after it is dropped."""
+    frame, start = state.frame, state.project.frame_start
+    stop = None if frame + 1 >= state.n_frames else frame + 1
+    state.undo_stack.push(TrimCommand(state, start if start <= frame else 0, stop,
+                                      f"set the out mark at frame {frame}"))
+
+
+class FrameRateCommand(ProjectCommand):
+    """Set the clip's frame rate (image folders have none; a video's header may be wrong)."""
+
+    def __init__(self, state: AppState, fps: float | None) -> None:
+        super().__init__(state, replace(state.project, fps=fps),
+                         f"set frame rate to {fps:g} fps" if fps else "use the file's frame rate")
+
+
 class AcceptAlternatesCommand(ProjectCommand):
     """Accept alternate frames for the switching models (paper Section 3.2)."""
 

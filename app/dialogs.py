@@ -125,6 +125,12 @@ class Asker:
         item, ok = QInputDialog.getItem(self._parent, title, "Frame:", [str(f) for f in frames], 0, False)
         return int(item) if ok else None
 
+    def frame_rate(self, current: float | None) -> float | None:
+        """A frame rate in frames per second (None: cancelled)."""
+        value, ok = QInputDialog.getDouble(self._parent, "Frame rate", "Frames per second:",
+                                           current or 25.0, 1.0, 1000.0, 3)
+        return value if ok else None
+
 
 class HeadlessAsker(Asker):
     """Answers without asking, for ``--screenshot`` runs: errors go to stderr and are kept.
@@ -176,6 +182,8 @@ class HeadlessAsker(Asker):
     def choose_frame(self, title: str, frames: list[int]) -> int | None:
         return None
 
+    def frame_rate(self, current: float | None) -> float | None:
+        return None
 
 ROOT_CHOICES = (
     ("auto", "Automatic: in place for a loop, forward for the clip"),

@@ -66,6 +66,8 @@ class DocumentController(QObject):
             return False
         self._state.open(project, None, source)
         self._add_recent(path)
+        if source is not None and source.note:
+            self.messageRaised.emit(source.note)
         if masks:
             self.run(Job(lambda progress: silhouettes_from_masks(path, progress),
                          "Tracking the masks"), lambda sil: self._set_initial_silhouettes(project, sil))

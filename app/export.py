@@ -21,6 +21,7 @@ from app.workers import Job
 from gaitcore.errors import GaitInputError
 from gaitcore.io.export import EXPORTERS, export_animation, write_preview_video
 from gaitcore.io.pose_table import PoseTable
+from gaitcore.project.footage_fit import footage_maps
 from gaitcore.project.steps import Animation, animate_project, frame_rate, open_source
 
 VIDEO = ".mp4"
@@ -73,17 +74,30 @@ class ExportController(QObject):
         skeleton, fps = animation.skeleton, export_fps(state)
         if suffix == VIDEO:
             curves = animation.exported()[1]
-            footage = self._footage_frames(animation)
+            footage, maps = self._footage_frames(animation), self._footage_maps(animation)
             job = Job(lambda progress: write_preview_video(path, footage, skeleton, curves, fps,
+                                                           footage_from_world=maps,
                                                            progress=progress), title)
         else:
             job = Job(lambda progress: _write(path, animation, fps, progress), title)
         return self._documents.run(job, lambda result: self._done(path, result), tied=False)
 
+    def _footage_maps(self, animation):
+        """Where the skeleton goes over each exported frame: the artist's footage fit."""
+        project, state = self._state.project, self._state
+        start = animation.first_frame + (animation.cycle_start if animation.cycle is not None else 0)
+        frames = range(start, start + len(animation.exported()[0]))
+        if state.source is None:  # masks only: the video shows the crops, skeleton centred
+            crops = project.silhouettes.roi.crops
+            return footage_maps(frames, animation.skeleton, None, (crops.shape[2], crops.shape[1]),
+                                project.footage_fit)
+        return footage_maps(frames, animation.skeleton, project.silhouettes, state.source.size,
+                            project.footage_fit)
+
     def _footage_frames(self, animation):
         """An iterator over the frames the exported poses go with, read on the job's thread."""
         project = self._state.project
-        start = animation.cycle_start if animation.cycle is not None else 0
+        start = animation.first_frame + (animation.cycle_start if animation.cycle is not None else 0)
         count = len(animation.exported()[0])
 
         def frames():

@@ -17,6 +17,7 @@ from PySide6.QtWidgets import QDockWidget, QMainWindow, QMenu, QSplitter, QWidge
 from app.analysis_controller import AnalysisController
 from app.animation import AnimationController
 from app.autosave import Autosaver, find_recovery_copies
+from app.commands import FrameRateCommand, set_in_mark, set_out_mark
 from app.dialogs import Asker
 from app.document import DocumentController
 from app.export import KINDS, ExportController
@@ -176,6 +177,10 @@ class MainWindow(QMainWindow):
         self._action(play, "Previous frame", Qt.Key.Key_Left, lambda: self.player.step(-1))
         self._action(play, "First frame", Qt.Key.Key_Home, lambda: self.player.go_to(0))
         self._action(play, "Last frame", Qt.Key.Key_End, lambda: self.player.go_to(-1))
+        play.addSeparator()
+        self._action(play, "Set &in mark", Qt.Key.Key_I, lambda: set_in_mark(self.state))
+        self._action(play, "Set &out mark", Qt.Key.Key_O, lambda: set_out_mark(self.state))
+        self._action(play, "Set &frame rate...", None, self._ask_frame_rate)
 
         pose = bar.addMenu("P&ose")
         posing = self.posing
@@ -275,6 +280,11 @@ class MainWindow(QMainWindow):
             painter.drawImage(rect, self.viewport.gl_view.render_image())
             painter.end()
         return pixmap
+
+    def _ask_frame_rate(self) -> None:
+        fps = self.asker.frame_rate(self.state.fps)
+        if fps is not None:
+            self.state.undo_stack.push(FrameRateCommand(self.state, fps))
 
     # -- window --------------------------------------------------------------------------------
     def _show_message(self, message: str) -> None:

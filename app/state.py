@@ -117,6 +117,11 @@ class AppState(QObject):
         return self._opened
 
     @property
+    def fps(self) -> float | None:
+        """The clip's frame rate: the project's (set by the artist), else the video's."""
+        return self._project.fps or (self._source.fps if self._source is not None else None)
+
+    @property
     def n_frames(self) -> int:
         """Frames of the clip: from the footage, else from the silhouettes, else 0."""
         if self._source is not None:

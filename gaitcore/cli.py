@@ -52,6 +52,27 @@ def _range(text: str) -> tuple[float, float]:
     return lo, hi
 
 
+def _add_frame_range(p: argparse.ArgumentParser) -> None:
+    """``--start F --stop F``: the source frames to use (stop excluded), and ``--fps``."""
+    p.add_argument("--start", type=int, default=0, metavar="F",
+                   help="first source frame to use (default 0)")
+    p.add_argument("--stop", type=int, default=None, metavar="F",
+                   help="source frame to stop before (default: the end)")
+    p.add_argument("--fps", type=float, default=None,
+                   help="frame rate of the clip (default: the video's; image folders have none)")
+
+
+def _clip_fps(args: argparse.Namespace) -> float | None:
+    """``--fps``, else the video's frame rate, else None; refuses a bad ``--fps``."""
+    from gaitcore.footage.sources import video_fps
+
+    if args.fps is not None:
+        if not (args.fps > 0 and args.fps < float("inf")):
+            raise GaitInputError(f"--fps must be a positive number of frames per second, got {args.fps}")
+        return float(args.fps)
+    return video_fps(args.input) if args.input.is_file() else None
+
+
 def _add_analyze(sub) -> None:
     p = sub.add_parser(
         "analyze",
@@ -77,6 +98,7 @@ def _add_analyze(sub) -> None:
                    "(default: on the track averaged over one gait period)")
     p.add_argument("--key-time-limit", type=float, default=60.0, metavar="SECONDS",
                    help="time budget of the exact key search (default 60)")
+    _add_frame_range(p)
     p.add_argument("--json", action="store_true", help="print analysis.json on stdout")
     p.set_defaults(run=_run_analyze)
 
@@ -97,24 +119,36 @@ def _run_analyze(args: argparse.Namespace) -> int:
         key_time_limit_s=args.key_time_limit,
         stabilize_roi=not args.paper_roi,
     )
+    fps = _clip_fps(args)
     roi = load_silhouettes(args.input, args.out, subject=args.subject, background=args.background,
-                           max_side=settings.max_side_px)
-    analysis = analyze(Silhouettes(roi, "masks" if is_mask_folder(args.input) else "segmented"),
-                       settings)
-    write_analysis_json(args.out / "analysis.json", analysis, source=str(args.input))
+                           max_side=settings.max_side_px, start=args.start, stop=args.stop)
+    silhouettes = Silhouettes(roi, "masks" if is_mask_folder(args.input) else "segmented")
+    analysis = analyze(silhouettes, settings, first_frame=args.start)
+    write_analysis_json(args.out / "analysis.json", analysis, source=str(args.input), fps=fps)
     if args.json:
-        print(json.dumps(analysis_to_dict(analysis, source=str(args.input)), indent=1))
+        print(json.dumps(analysis_to_dict(analysis, source=str(args.input), fps=fps), indent=1))
     else:
         d = analysis.diagnosis
         sel = analysis.selection
-        print(f"frames: {analysis.n_frames} (subject lost in {len(analysis.lost_frames)})")
+        start, stop = analysis.frame_range
+        print(f"frames: {analysis.n_frames}, {start} to {stop - 1} "
+              f"(subject lost in {len(analysis.lost_frames)})")
         print("variance: " + " ".join(f"{100 * v:.1f}%" for v in analysis.pca.variance_ratio))
         print("r per PC: " + " ".join(f"{r:.2f}" for r in d.correlations))
         print(f"period: {d.period_frames:.1f} frames; verdict: {d.verdict.value}: {d.reason}")
-        print(f"key-images: {list(sel.frames)} (cond {sel.condition_number:.3g}, "
+        print(f"key-images: {list(analysis.key_frames)} (cond {sel.condition_number:.3g}, "
               f"{'proven optimal' if sel.exact else 'not proven optimal'})")
         if analysis.alternate_frames is not None:
             print(f"alternates: {list(analysis.alternate_frames)}")
+        if analysis.alternates_note:
+            print(analysis.alternates_note)
+        for c in analysis.cycles:
+            d = c.to_dict(analysis.cycle_offset)
+            print(f"steady gait: frames {d['start']} to {d['stop'] - 1}, cycle "
+                  f"{d['period_frames']:.1f} frames, r1 = {c.r1:.2f}, r2 = {c.r2:.2f}")
+        advice = analysis.advice
+        if advice is not None and advice.cause.value != "none":
+            print(f"advice: {advice.message} {advice.next_step}")
         print(f"wrote {args.out / 'analysis.json'}")
     return 0
 
@@ -141,8 +175,9 @@ def _add_animate(sub) -> None:
                    help="also write a binary glTF with a skinned mesh (needs --skeleton)")
     p.add_argument("--skeleton", type=Path, default=None, metavar="SKEL.json|SKEL.bvh",
                    help="joint hierarchy for --bvh/--glb: a skeleton JSON, or a BVH file")
-    p.add_argument("--fps", type=float, default=24.0,
-                   help="frame rate of time_s, the BVH frame time and glTF key times (24)")
+    p.add_argument("--fps", type=float, default=None,
+                   help="frame rate of time_s, the BVH frame time and glTF key times (default: "
+                   "the clip's, from analysis.json, else 24)")
     p.add_argument("--csv-time", action="store_true",
                    help="add a time_s column (frame / fps) after 'frame' in CURVES.csv")
     p.add_argument("--loop", action="store_true",
@@ -162,6 +197,7 @@ def _run_animate(args: argparse.Namespace) -> int:
     import numpy as np
 
     from gaitcore.animation.animate import animate_record
+    from gaitcore.footage.sources import DEFAULT_FPS
     from gaitcore.io.analysis_file import read_analysis_json
     from gaitcore.io.export import EXPORTERS
     from gaitcore.io.motion import AUTO, export_motion
@@ -172,7 +208,7 @@ def _run_animate(args: argparse.Namespace) -> int:
     if exports and args.skeleton is None:
         raise GaitInputError(f"--{exports[0][0]} needs --skeleton SKEL.json (or a .bvh file) "
                              "to know the joint hierarchy")
-    if not (np.isfinite(args.fps) and args.fps > 0):
+    if args.fps is not None and not (np.isfinite(args.fps) and args.fps > 0):
         raise GaitInputError(f"--fps must be a positive number of frames per second, got {args.fps}")
     skeleton = None
     if args.skeleton is not None:
@@ -182,28 +218,31 @@ def _run_animate(args: argparse.Namespace) -> int:
         if note:
             print(note)
     record = read_analysis_json(args.analysis)
+    fps = args.fps or record.fps or DEFAULT_FPS
     table = read_pose_table(args.key_poses)
     if exports:
         pose_matrix(skeleton, table)  # every channel of the skeleton posed, before any work
-    alternates = None if args.no_switching else record.alternate_frames
+    first = record.first_frame
     poses = table.as_dict()
+    alternates = None if args.no_switching else record.alternate_frames
     try:
         curves = animate_record(record, poses, alternates=alternates, filtered=args.filtered,
                                 clamp=args.clamp)
     except GaitInputError as exc:
         raise GaitInputError(f"{args.key_poses}: {exc}") from None
-    motion = export_motion(curves, table.columns, key_poses=poses, skeleton=skeleton,
-                           loop=args.loop, period_frames=record.period_frames,
+    _warn_swaps(record, alternates)
+    motion = export_motion(curves, table.columns, key_poses=record.rows_of(poses),
+                           skeleton=skeleton, loop=args.loop, period_frames=record.period_frames,
                            root_motion=args.root or AUTO,
-                           ground_contact=not args.no_ground_contact)
+                           ground_contact=not args.no_ground_contact, first_frame=first)
     out_table = PoseTable(motion.frames, table.columns, motion.poses)
-    write_pose_table(args.out, out_table, fps=args.fps if args.csv_time else None)
+    write_pose_table(args.out, out_table, fps=fps if args.csv_time else None)
     n = len(motion.frames)
     print(f"wrote {args.out} ({n} frames, {len(table.columns)} channels): {motion.summary()}")
     _print_contact(motion.contact)
     for flag, path in exports:  # the flag, not the file's suffix, names the format
-        EXPORTERS[f".{flag}"].write(path, skeleton, out_table, args.fps, args.bone_names)
-        print(f"wrote {path} ({skeleton.n_joints} joints, {n} frames at {args.fps:g} fps)")
+        EXPORTERS[f".{flag}"].write(path, skeleton, out_table, fps, args.bone_names)
+        print(f"wrote {path} ({skeleton.n_joints} joints, {n} frames at {fps:g} fps)")
     return 0
 
 
@@ -214,6 +253,16 @@ def _print_contact(contact) -> None:
               f"{foot.moved_frames} frames by up to {100 * foot.max_shift_m:.1f} cm "
               f"(mean {100 * foot.mean_shift_m:.1f} cm); lowest {100 * foot.lowest_before_m:.1f}"
               f" -> {100 * foot.lowest_after_m:.1f} cm")
+
+
+def _warn_swaps(record, alternates: tuple[int, ...] | None) -> None:
+    """Warn (stderr) when the alternates swap left and right faster than the gait."""
+    from gaitcore.analysis.alternates import swap_warning
+
+    warning = alternates and swap_warning(record.loop_angle, record.rows(record.key_frames),
+                                          record.rows(alternates))
+    if warning:
+        print(f"gaitcore: warning: {warning}", file=sys.stderr)
 
 
 def _int_list(text: str) -> tuple[int, ...]:

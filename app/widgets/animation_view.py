@@ -94,23 +94,26 @@ class AnimationView(QWidget):
         if animation is None:
             return
         w = animation.weights
-        t = np.arange(len(w.weights))
+        first = animation.first_frame
+        t = first + np.arange(len(w.weights))
         keys, alts = list(self._state.analysis.key_frames), list(self._posing.alternates())
-        for i, frame in enumerate(w.pose_frames):
+        for i, row in enumerate(w.pose_frames):
+            frame = first + row
             pair = keys.index(frame) if frame in keys else alts.index(frame)  # key i and its alternate
             colour = pg.intColor(pair, hues=max(len(keys), 1), maxHue=300, minValue=120, maxValue=220)
             style = Qt.PenStyle.DashLine if frame in alts else Qt.PenStyle.SolidLine
             pen = pg.mkPen(colour, width=2, style=style)
             label = f"{'alt' if frame in alts else 'key'} {frame}"
             curve = self.plot.plot(t, w.weights[:, i], pen=pen, name=label)
-            dot = self.plot.plot([frame], [w.weights[frame, i]], pen=None, symbol="o",
+            dot = self.plot.plot([frame], [w.weights[frame - first, i]], pen=None, symbol="o",
                                  symbolBrush=colour, symbolPen=None, symbolSize=7)
             self._curves += [curve, dot]
         total = self.plot.plot(t, w.total, pen=pg.mkPen("k", width=1.5, style=Qt.PenStyle.DotLine),
                                name="Σ w_i")
         self._curves.append(total)
         if animation.cycle is not None:
-            band = pg.LinearRegionItem((animation.cycle_start, animation.cycle_start + len(animation.cycle)),
+            start = first + animation.cycle_start
+            band = pg.LinearRegionItem((start, start + len(animation.cycle)),
                                        movable=False, brush=pg.mkBrush(0, 150, 0, 30))
             self.plot.addItem(band)
             self._curves.append(band)

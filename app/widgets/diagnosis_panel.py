@@ -90,18 +90,28 @@ class DiagnosisPanel(QWidget):
             style = "" if good else " style='color:#b00000'"
             cells.append(f"<td{style}>PC{k + 1}&nbsp;{r:.2f}</td>")
         variance = analysis.pca.variance_ratio * 100
-        fps = self._state.source.fps if self._state.source is not None else None
+        fps = self._state.fps
         period = f"{d.period_frames:.1f} frames"
         if fps:
             period += f" ({d.period_frames / fps:.2f} s at {fps:g} fps)"
         lost = len(analysis.lost_frames)
+        start, stop = analysis.frame_range
+        advice = analysis.advice
+        steps = ""
+        if advice is not None and advice.cause.value != "none":
+            steps += f"<p><b>{html.escape(advice.message)}</b> {html.escape(advice.next_step)}</p>"
+        elif advice is not None and advice.next_step:
+            steps += f"<p>{html.escape(advice.next_step)}</p>"
+        if analysis.alternates_note:
+            steps += f"<p style='color:#b00000'>{html.escape(analysis.alternates_note)}</p>"
         return (
             f"<b style='color:{colour}; font-size:14pt'>{html.escape(d.verdict.value.capitalize())}</b>"
             f"<table cellspacing='6'><tr><td><b>r</b></td>{''.join(cells)}</tr>"
             f"<tr><td><b>var %</b></td>{''.join(f'<td>{v:.1f}</td>' for v in variance)}</tr></table>"
             f"Period of PC1: <b>{period}</b>; band {d.band[0]:.3f}–{d.band[1]:.3f} cycles/frame."
             + (f" {lost} frame(s) without a silhouette were interpolated." if lost else "")
-            + f"<p>{html.escape(d.reason)}</p>"
+            + f" Frames {start} to {stop - 1}."
+            + f"<p>{html.escape(d.reason)}</p>" + steps
             + f"<p style='color:gray'>Usable when r1 and r2 ≥ {THRESHOLD} (paper 5.2);"
             f" good clips keep r3.. ≤ {QUIET_CORRELATION}.</p>"
         )

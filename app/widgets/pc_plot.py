@@ -57,6 +57,7 @@ class PCPlotWidget(QWidget):
         super().__init__(parent)
         self._state = state
         self._coords = np.zeros((0, 2))
+        self._first = 0  # source frame of the first row of _coords
         self.plot = pg.PlotWidget()
         self.plot.setLabel("bottom", "PC1")
         self.plot.setLabel("left", "PC2")
@@ -121,8 +122,9 @@ class PCPlotWidget(QWidget):
 
     # -- queries for tests and benchmarks -----------------------------------------------------
     def point_xy(self, frame: int) -> tuple[float, float]:
-        """Plot coordinates of ``frame``'s point."""
-        return float(self._coords[frame, 0]), float(self._coords[frame, 1])
+        """Plot coordinates of source frame ``frame``'s point."""
+        row = frame - self._first
+        return float(self._coords[row, 0]), float(self._coords[row, 1])
 
     def cursor_xy(self) -> tuple[float, float] | None:
         """Plot coordinates of the current-frame marker (None when hidden)."""
@@ -155,15 +157,18 @@ class PCPlotWidget(QWidget):
         cmap = pg.colormap.get("viridis")
         brushes = [pg.mkBrush(c) for c in cmap.map(np.linspace(0, 1, n), mode="qcolor")]
         self._line.setData(self._coords[:, 0], self._coords[:, 1])
+        self._first = analysis.first_frame  # the points are rows of the trim
         self._points.setData(x=self._coords[:, 0], y=self._coords[:, 1], brush=brushes,
-                             data=np.arange(n))
-        keys = list(analysis.key_frames)
-        self._keys.setData(self._coords[keys, 0], self._coords[keys, 1], data=keys)
+                             data=self._first + np.arange(n))
+        keys = list(analysis.key_frames)  # source frames; the coordinates are rows
+        self._keys.setData(self._coords[analysis.rows(keys), 0], self._coords[analysis.rows(keys), 1],
+                           data=keys)
         alts = list(analysis.alternate_frames or ())
-        self._alternates.setData(self._coords[alts, 0], self._coords[alts, 1], data=alts)
+        self._alternates.setData(self._coords[analysis.rows(alts), 0],
+                                 self._coords[analysis.rows(alts), 1], data=alts)
         for f in keys + alts:
             label = pg.TextItem(str(f), color=(90, 50, 0) if f in keys else (0, 90, 120), anchor=(-0.3, 1.1))
-            label.setPos(*self._coords[f])
+            label.setPos(*self._coords[f - analysis.first_frame])
             self.plot.addItem(label)
             self._labels.append(label)
         sel = analysis.selection
@@ -185,15 +190,17 @@ class PCPlotWidget(QWidget):
         self.messageRaised.emit(message)
 
     def _move_cursor(self, frame: int) -> None:
-        if 0 <= frame < len(self._coords):
-            self._cursor.setData([self._coords[frame, 0]], [self._coords[frame, 1]], data=[frame])
+        row = frame - self._first
+        if 0 <= row < len(self._coords):
+            self._cursor.setData([self._coords[row, 0]], [self._coords[row, 1]], data=[frame])
         else:
             self._cursor.setData([], [])
         self._update_buttons()
 
     def _show_selected(self, frame: int) -> None:
-        if 0 <= frame < len(self._coords):
-            self._selected.setData([self._coords[frame, 0]], [self._coords[frame, 1]], data=[frame])
+        row = frame - self._first
+        if 0 <= row < len(self._coords):
+            self._selected.setData([self._coords[row, 0]], [self._coords[row, 1]], data=[frame])
         else:
             self._selected.setData([], [])
 

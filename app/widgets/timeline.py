@@ -4,14 +4,20 @@ Clicking or dragging moves the current frame. Marks: key-images (orange triangle
 track; the selected key outlined in red), proposed alternates (cyan outlines), accepted alternates (cyan triangles), pinned
 keys (a dot), dropped keys (a grey cross), lost frames (red ticks), sketched frames (yellow
 ticks under the track).
+
+The trim (the in and out marks, set with I and O) darkens the frames outside it and has a
+handle at each end that can be dragged (one undo step per drag). Under the track, green bars
+are the stretches of steady gait the analysis found (brighter: higher r); right-click one to
+trim to it.
 """
 
 from __future__ import annotations
 
 from PySide6.QtCore import QPointF, QRectF, QSize, Qt
 from PySide6.QtGui import QColor, QPainter, QPen, QPolygonF
-from PySide6.QtWidgets import QSizePolicy, QWidget
+from PySide6.QtWidgets import QMenu, QSizePolicy, QWidget
 
+from app.commands import TrimCommand
 from app.state import AppState
 
 KEY_COLOUR = QColor(255, 140, 0)
@@ -19,8 +25,13 @@ ALTERNATE_COLOUR = QColor(0, 170, 220)
 LOST_COLOUR = QColor(220, 30, 30)
 SKETCH_COLOUR = QColor(230, 190, 0)
 CURSOR_COLOUR = QColor(200, 0, 0)
+TRIM_COLOUR = QColor(250, 250, 250)
+OUTSIDE_SHADE = QColor(0, 0, 0, 150)
+CYCLE_COLOUR = QColor(40, 180, 80)
 _MARGIN = 12
 _LABEL_W = 90
+_GRAB_PX = 6
+_CYCLE_ROW = 14  # height of the row of steady-gait bars under the track
 
 
 class TimelineWidget(QWidget):
@@ -29,7 +40,8 @@ class TimelineWidget(QWidget):
     def __init__(self, state: AppState, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self._state = state
-        self.setMinimumHeight(56)
+        self.setMinimumHeight(76)
+        self._drag: tuple[str, int] | None = None  # ("in" or "out", frame) while dragging
         self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
         self.setFocusPolicy(Qt.FocusPolicy.NoFocus)
         self.setToolTip("Click or drag to move through the clip")
@@ -41,7 +53,7 @@ class TimelineWidget(QWidget):
         self.update()
 
     def sizeHint(self) -> QSize:  # noqa: N802 - Qt API
-        return QSize(600, 56)
+        return QSize(600, 76)
 
     # -- geometry -------------------------------------------------------------------------
     def _track(self) -> QRectF:
@@ -59,14 +71,95 @@ class TimelineWidget(QWidget):
         track = self._track()
         return max(0, min(n - 1, int((x - track.left()) / track.width() * n)))
 
+    # -- trim and cycles -------------------------------------------------------------------
+    def trim_range(self) -> tuple[int, int]:
+        """Source frames ``start, stop`` of the trim as shown (a handle being dragged counts)."""
+        start, stop = self._committed_trim()
+        if self._drag is not None:
+            side, frame = self._drag
+            start, stop = (min(frame, stop - 1), stop) if side == "in" else (start, max(frame + 1, start + 1))
+        return start, stop
+
+    def _committed_trim(self) -> tuple[int, int]:
+        """The project's trim within the footage, stop as a number."""
+        start, stop = self._state.project.trim
+        n = self._state.n_frames
+        return min(start, max(0, n - 1)), n if stop is None else min(stop, n)
+
+    def cycles(self) -> list[tuple[int, int, float, float]]:
+        """Stretches of steady gait: (start, stop, period_frames, min r), source frames."""
+        analysis = self._state.analysis
+        if analysis is None:
+            return []
+        off = analysis.cycle_offset
+        return [(c.start + off, c.stop + off, c.period_frames, min(c.r1, c.r2)) for c in analysis.cycles]
+
+    def cycle_at(self, x: float) -> tuple[int, int, float, float] | None:
+        frame = self.frame_at(x)
+        return next((c for c in self.cycles() if c[0] <= frame < c[1]), None)
+
+    def trim_to(self, start: int, stop: int, text: str = "trim to a stretch") -> None:
+        """Trim to source frames ``start <= f < stop`` (one undo step)."""
+        n = self._state.n_frames
+        self._state.undo_stack.push(TrimCommand(self._state, start, None if stop >= n else stop, text))
+
+    def _handle_near(self, x: float) -> str | None:
+        start, stop = self.trim_range()
+        if abs(x - self._edge_x(start)) <= _GRAB_PX:
+            return "in"
+        if abs(x - self._edge_x(stop)) <= _GRAB_PX:
+            return "out"
+        return None
+
+    def _edge_x(self, frame: int) -> float:
+        """Position of the left edge of ``frame`` (``frame == n``: the right end)."""
+        return self.x_of(frame) - 0.5 * self._track().width() / max(1, self._state.n_frames)
+
     # -- events ---------------------------------------------------------------------------
     def mousePressEvent(self, event) -> None:  # noqa: N802 - Qt API
-        if event.button() == Qt.MouseButton.LeftButton and self._state.n_frames:
-            self._state.set_frame(self.frame_at(event.position().x()))
+        if not self._state.n_frames:
+            return
+        x = event.position().x()
+        if event.button() == Qt.MouseButton.RightButton:
+            self.context_menu(x).exec(event.globalPosition().toPoint())
+        elif event.button() == Qt.MouseButton.LeftButton:
+            side = self._handle_near(x)
+            if side is not None:
+                self._drag = (side, self.frame_at(x) if side == "in" else self.frame_at(x - 1))
+                self.update()
+            else:
+                self._state.set_frame(self.frame_at(x))
 
     def mouseMoveEvent(self, event) -> None:  # noqa: N802 - Qt API
         if event.buttons() & Qt.MouseButton.LeftButton and self._state.n_frames:
-            self._state.set_frame(self.frame_at(event.position().x()))
+            frame = self.frame_at(event.position().x())
+            if self._drag is not None:
+                self._drag = (self._drag[0], frame)
+                self.update()
+            else:
+                self._state.set_frame(frame)
+
+    def mouseReleaseEvent(self, event) -> None:  # noqa: N802 - Qt API
+        if self._drag is not None and event.button() == Qt.MouseButton.LeftButton:
+            start, stop = self.trim_range()
+            side = self._drag[0]
+            self._drag = None
+            if (start, stop) != self._committed_trim():
+                self.trim_to(start, stop, f"move the {side} mark")
+            self.update()
+
+    def context_menu(self, x: float) -> QMenu:
+        """The right-click menu at widget position ``x``: trim to the stretch of steady gait
+        under it, or clear the marks."""
+        cycle = self.cycle_at(x)
+        menu = QMenu(self)
+        if cycle is not None:
+            start, stop = cycle[0], cycle[1]
+            menu.addAction(f"Trim to this stretch (frames {start}–{stop - 1})",
+                           lambda: self.trim_to(start, stop))
+        menu.addAction("Clear the in and out marks", lambda: self.trim_to(0, self._state.n_frames,
+                                                                         "clear the trim"))
+        return menu
 
     def paintEvent(self, event) -> None:  # noqa: N802 - Qt API
         p = QPainter(self)
@@ -80,6 +173,8 @@ class TimelineWidget(QWidget):
             p.drawText(track, Qt.AlignmentFlag.AlignCenter, "no footage: File > Open")
             return
         self._paint_ticks(p, track, n)
+        self._paint_cycles(p, track)
+        self._paint_trim(p, track, n)
         self._paint_marks(p, track)
         x = self.x_of(self._state.frame)
         p.setPen(QPen(CURSOR_COLOUR, 2))
@@ -105,6 +200,31 @@ class TimelineWidget(QWidget):
             p.fillRect(QRectF(self.x_of(f) - width / 2, track.top(), width, track.height()), LOST_COLOUR)
         for f in project.sketched_frames():
             p.fillRect(QRectF(self.x_of(f) - width / 2, track.bottom() + 2, width, 4), SKETCH_COLOUR)
+
+    def _paint_trim(self, p: QPainter, track: QRectF, n: int) -> None:
+        start, stop = self.trim_range()
+        left, right = self._edge_x(start), self._edge_x(stop)
+        p.fillRect(QRectF(track.left(), track.top(), left - track.left(), track.height()), OUTSIDE_SHADE)
+        p.fillRect(QRectF(right, track.top(), track.right() - right, track.height()), OUTSIDE_SHADE)
+        if (start, stop) == (0, n):
+            return
+        p.setPen(QPen(TRIM_COLOUR, 2))
+        for x, sign in ((left, 1), (right, -1)):  # brackets: [ at the in mark, ] at the out mark
+            p.drawLine(QPointF(x, track.top() - 3), QPointF(x, track.bottom() + 3))
+            p.drawLine(QPointF(x, track.top() - 3), QPointF(x + 4 * sign, track.top() - 3))
+            p.drawLine(QPointF(x, track.bottom() + 3), QPointF(x + 4 * sign, track.bottom() + 3))
+
+    def _paint_cycles(self, p: QPainter, track: QRectF) -> None:
+        top = track.bottom() + 8
+        for start, stop, period, r in self.cycles():
+            colour = QColor(CYCLE_COLOUR)
+            colour.setAlpha(int(90 + 165 * max(0.0, min(1.0, (r - 0.4) / 0.6))))
+            left, right = self._edge_x(start), self._edge_x(stop)
+            bar = QRectF(left, top, max(2.0, right - left), _CYCLE_ROW)
+            p.fillRect(bar, colour)
+            p.setPen(QColor(255, 255, 255))
+            p.drawText(bar.adjusted(3, 0, 0, 0), Qt.AlignmentFlag.AlignVCenter | Qt.AlignmentFlag.AlignLeft,
+                       f"cycle {period:.0f} f, r {r:.2f}")
 
     def _paint_marks(self, p: QPainter, track: QRectF) -> None:
         project, analysis = self._state.project, self._state.analysis

@@ -44,6 +44,7 @@ def propose_alternates(
     *,
     min_gap: int = 3,
     theta: np.ndarray | None = None,
+    period_frames: float | None = None,
 ) -> tuple[int, ...]:
     """Propose, for each key-image, the frame with the same silhouette in the other half-cycle.
 
@@ -56,8 +57,14 @@ def propose_alternates(
     theta : ndarray of shape (n,), optional
         Loop angle (see :func:`loop_angle`). When given and the clip covers a whole gait
         cycle (two turns), candidates are restricted to frames an odd number of turns of the
-        loop away from the key (within half a turn): on a clip of several cycles, the nearest
-        frame may otherwise be the same pose one cycle later, which resolves nothing.
+        loop away from the key (within a quarter turn with ``period_frames``, half a turn
+        without): on a clip of several cycles, the nearest frame may otherwise be the same
+        pose one cycle later, which resolves nothing.
+    period_frames : float, optional
+        The diagnosis' period: one turn of the loop, half a cycle of a walk. When given, an
+        alternate must also lie an odd number of periods from its key in time, within a
+        quarter period, so it is never in the neighbouring frames, whatever the noise does
+        to the loop angle.
 
     Returns
     -------
@@ -67,7 +74,7 @@ def propose_alternates(
     Raises
     ------
     GaitInputError
-        If some key has no frame at least ``min_gap`` frames away.
+        If some key has no allowed frame; the message says where one was looked for.
 
     Notes
     -----
@@ -75,25 +82,76 @@ def propose_alternates(
     """
     p = np.asarray(projections, dtype=float)
     n = p.shape[0]
-    frames = np.arange(n)
-    use_phase = theta is not None and theta[-1] - theta[0] >= 2 * TWO_PI
     out = []
     for k in key_frames:
         if not 0 <= k < n:
             raise GaitInputError(f"key frame {k} is outside the clip (0..{n - 1})")
-        ok = np.abs(frames - k) >= min_gap
-        if use_phase:
-            # Turns of the loop between each frame and the key, modulo a gait cycle (2 turns):
-            # about 1 in the other half-cycle, about 0 or 2 for the same pose a cycle away.
-            turns = np.mod((theta - theta[k]) / TWO_PI, 2.0)
-            other_half = (turns >= 0.5) & (turns < 1.5)
-            if np.any(ok & other_half):
-                ok &= other_half
+        ok = _candidates(n, k, min_gap, theta, period_frames)
         if not ok.any():
+            where = (f"about {period_frames:.0f} frames (half a stride) from key {k}"
+                     if period_frames is not None else f"{min_gap} or more frames from key {k}")
             raise GaitInputError(
-                f"no frame is at least {min_gap} frames away from key {k}: the clip is too "
-                "short to look for the other half-cycle"
+                f"no frame of the other half-cycle lies {where}: the clip is too short or "
+                "too irregular to look for alternates; use a longer stretch of steady gait"
             )
         d = np.where(ok, ((p - p[k]) ** 2).sum(axis=1), np.inf)
         out.append(int(np.argmin(d)))
     return tuple(out)
+
+
+def _candidates(n: int, k: int, min_gap: int, theta: np.ndarray | None,
+                period_frames: float | None) -> np.ndarray:
+    """Frames allowed as key ``k``'s alternate, shape (n,) bool (see propose_alternates)."""
+    frames = np.arange(n)
+    reach = 0.25 if period_frames is not None else 0.5
+    ok = np.abs(frames - k) >= min_gap
+    if period_frames is not None:
+        periods = np.abs(frames - k) / float(period_frames)
+        ok &= np.abs(np.mod(periods - 1.0, 2.0) - 1.0) >= 1.0 - reach  # odd, +- a quarter
+    if theta is not None and theta[-1] - theta[0] >= 2 * TWO_PI:
+        # Turns of the loop between each frame and the key, modulo a gait cycle (2 turns):
+        # about 1 in the other half-cycle, about 0 or 2 for the same pose a cycle away.
+        other_half = np.abs(np.mod((theta - theta[k]) / TWO_PI, 2.0) - 1.0) <= reach
+        if period_frames is not None or np.any(ok & other_half):
+            ok &= other_half
+    return ok
+
+
+def left_right_swaps(theta: np.ndarray, key_frames: tuple[int, ...] | list[int],
+                     alternate_frames: tuple[int, ...] | list[int]) -> int:
+    """How often, per gait cycle, a switching animation passes from a key's pose to an
+    alternate's (the left/right mirror) or back.
+
+    Parameters
+    ----------
+    theta : ndarray of shape (n,)
+        Loop angle (:func:`loop_angle`); two turns make a gait cycle.
+    key_frames, alternate_frames : sequence of int, same length
+
+    Returns
+    -------
+    int
+        Changes between keys and alternates along the gait cycle, the poses ordered by
+        phase as the switching models order them. A walk swaps left and right twice per
+        cycle; more means alternates that lie beside their keys, and an animation that
+        swaps the legs faster than the gait does.
+    """
+    frames = list(key_frames) + list(alternate_frames)
+    is_alt = np.array([False] * len(key_frames) + [True] * len(alternate_frames))
+    phase = np.mod(np.asarray([theta[f] for f in frames]) - theta[key_frames[0]], 2 * TWO_PI)
+    ordered = is_alt[np.argsort(phase, kind="stable")]
+    return int(np.count_nonzero(ordered != np.roll(ordered, 1)))
+
+
+def swap_warning(theta: np.ndarray, key_frames: tuple[int, ...] | list[int],
+                 alternate_frames: tuple[int, ...] | list[int]) -> str | None:
+    """A sentence for the artist when the alternates make the animation swap left and right
+    faster than the gait (see :func:`left_right_swaps`), else None."""
+    if not alternate_frames or len(alternate_frames) != len(key_frames):
+        return None
+    swaps = left_right_swaps(theta, key_frames, alternate_frames)
+    if swaps <= 2:
+        return None
+    return (f"the switching animation swaps left and right {swaps} times per gait cycle where "
+            "the gait does it twice: some alternates lie beside their keys instead of half a "
+            "stride away; accept the proposed alternates again or turn switching off")

@@ -1,7 +1,14 @@
 """The paper's pipeline from silhouettes to animation, as two steps a script or the GUI runs.
 
 ``analyze_silhouettes``: ROI crops -> PCA -> spectral diagnosis -> key-image selection ->
-(optionally) alternates for the switching models. ``animate``: key poses -> a pose per frame.
+(optionally) alternates for the switching models; beside it, the stretches of steady gait of
+the whole clip and advice that names what stands in the way. ``rekey`` redoes the keys only.
+
+Frames: the silhouettes given start at source frame ``first_frame``; a trim (``frame_range``,
+source frames) restricts the analysis to part of them. An :class:`Analysis` names frames by
+their source numbers (keys, alternates, lost frames, as the artist sees them and as settings
+give them); its arrays have one row per analysed frame, row 0 being ``first_frame``
+(``Analysis.rows`` converts).
 """
 
 from __future__ import annotations
@@ -11,7 +18,9 @@ from dataclasses import dataclass, field, replace
 import cv2
 import numpy as np
 
+from gaitcore.analysis.advice import Advice, advise
 from gaitcore.analysis.alternates import loop_angle, propose_alternates
+from gaitcore.analysis.cycles import Cycle, find_cycles
 from gaitcore.analysis.image_pca import ImagePCA
 from gaitcore.analysis.kernel import DEFAULT_ALPHA
 from gaitcore.analysis.keyimages import KeySelection, select_key_images
@@ -80,15 +89,28 @@ class Analysis:
     pca : ImagePCA
         Fitted on the frames where the subject was found.
     projections : ndarray of shape (n, C)
-        Normalized PCA coordinates of every frame (C = min(5, available) components); lost
-        frames are interpolated in time and listed in ``lost_frames``.
+        Normalized PCA coordinates of every analysed frame (C = min(5, available)
+        components); lost frames are interpolated in time and listed in ``lost_frames``.
     lost_frames : tuple of int
+        Source frames.
     diagnosis : Diagnosis
     selection : KeySelection
+        The key search, in rows (``key_frames`` gives source frames).
     loop_angle : ndarray of shape (n,)
         Unwrapped angle around the (PC1, PC2) loop of the filtered trajectory.
     alternate_frames : tuple of int or None
-        One per key, in key order, when switching is on.
+        Source frames, one per key, in key order, when switching is on and every key has one.
+    alternates_note : str or None
+        Why no alternates are proposed although switching is on, or a warning about them.
+    first_frame : int
+        Source frame of row 0 (the start of the trim).
+    cycles : tuple of Cycle
+        Stretches of steady gait over all the silhouettes given (not only the trim), in
+        their rows; ``cycle_offset`` maps them to source frames.
+    cycle_offset : int
+        Source frame of the first silhouette given.
+    advice : Advice
+        What stands in the way of a usable analysis, and the one next step.
     """
 
     settings: AnalysisSettings
@@ -99,6 +121,11 @@ class Analysis:
     selection: KeySelection
     loop_angle: np.ndarray
     alternate_frames: tuple[int, ...] | None = field(default=None)
+    alternates_note: str | None = None
+    first_frame: int = 0
+    cycles: tuple[Cycle, ...] = ()
+    cycle_offset: int = 0
+    advice: Advice | None = None
 
     @property
     def n_frames(self) -> int:
@@ -111,12 +138,22 @@ class Analysis:
 
     @property
     def key_frames(self) -> tuple[int, ...]:
-        return self.selection.frames
+        """Source frames of the key-images, sorted."""
+        return tuple(f + self.first_frame for f in self.selection.frames)
+
+    def rows(self, frames: tuple[int, ...] | list[int]) -> list[int]:
+        """Rows of the arrays for source ``frames`` (which must lie in :attr:`frame_range`)."""
+        return [int(f) - self.first_frame for f in frames]
 
     @property
     def posed_frames(self) -> tuple[int, ...]:
         """Every frame the artist must pose: keys, then alternates when switching."""
         return self.key_frames + (self.alternate_frames or ())
+
+    @property
+    def frame_range(self) -> tuple[int, int]:
+        """Source frames ``start <= f < stop`` analysed."""
+        return self.first_frame, self.first_frame + self.n_frames
 
 
 def working_images(roi: RoiClip, max_side_px: int | None) -> np.ndarray:
@@ -144,6 +181,8 @@ def analyze_silhouettes(
     roi: RoiClip,
     settings: AnalysisSettings = AnalysisSettings(),
     *,
+    first_frame: int = 0,
+    frame_range: tuple[int, int | None] | None = None,
     sketched: bool = False,
     progress: Progress | None = None,
 ) -> Analysis:
@@ -154,28 +193,31 @@ def analyze_silhouettes(
     roi : RoiClip
         Fixed-size binary crops of the subject, one per frame.
     settings : AnalysisSettings
+    first_frame : int
+        Source frame of the first crop (when the silhouettes are of part of a clip).
+    frame_range : (int, int or None), optional
+        Source frames ``start <= f < stop`` to analyse (the trim; None: all). The stretches
+        of steady gait are searched over all the silhouettes all the same.
     sketched : bool
         The silhouettes come from sketches (changes the advice of an unusable diagnosis).
     progress : callable(done, total) -> bool, optional
-        Reports the PCA (one pass per crop placement) and the key search as equal stages;
-        returning False cancels with ``Cancelled``.
+        Reports the cycle search, the PCA (per crop placement) and the key search as equal
+        stages; returning False cancels with ``Cancelled``.
 
     Raises
     ------
     GaitInputError
-        Too few frames for the requested keys, no motion, too few distinct silhouettes.
+        A trim outside the silhouettes, too few frames for the keys, no motion.
     """
-    found = np.nonzero(~roi.lost)[0]
-    if found.size < max(settings.keys, 2) + 1:
-        raise GaitInputError(
-            f"only {found.size} frame(s) with a subject for {settings.keys} key-images; "
-            "use a longer clip or fewer keys"
-        )
-    stages = 3 if settings.stabilize_roi else 2
-    pca, proj, diagnosis = _describe(roi, settings, sketched, _stage(progress, 0, stages))
+    start, stop = _trim(frame_range, first_frame, roi.crops.shape[0])
+    whole, roi = roi, _slice(roi, start, stop)
+    _check_found(roi, settings)
+    stages = 4 if settings.stabilize_roi else 3
+    cycles = find_cycles(whole, progress=_stage(progress, 0, stages))
+    pca, proj, diagnosis = _describe(roi, settings, sketched, _stage(progress, 1, stages))
     if settings.stabilize_roi and diagnosis.verdict is not Verdict.NOT_USABLE:
         roi = stabilize_rois(roi, diagnosis.period_frames)
-        pca, proj, diagnosis = _describe(roi, settings, sketched, _stage(progress, 1, stages))
+        pca, proj, diagnosis = _describe(roi, settings, sketched, _stage(progress, 2, stages))
     theta = loop_angle(diagnosis.filtered)
     for arr in (proj, theta):
         arr.setflags(write=False)
@@ -183,12 +225,43 @@ def analyze_silhouettes(
         settings=settings,
         pca=pca,
         projections=proj,
-        lost_frames=tuple(int(t) for t in np.nonzero(roi.lost)[0]),
+        lost_frames=tuple(int(t) + first_frame + start for t in np.nonzero(roi.lost)[0]),
         diagnosis=diagnosis,
         selection=KeySelection(frames=(), condition_number=float("nan"), exact=False, nodes_visited=0),
         loop_angle=theta,
+        first_frame=first_frame + start,
+        cycles=cycles,
+        cycle_offset=first_frame,
+        advice=advise(roi, diagnosis, cycles, first_frame=first_frame, sketched=sketched),
     )
     return rekey(motion, settings, progress=_stage(progress, stages - 1, stages))
+
+
+def _check_found(roi: RoiClip, settings: AnalysisSettings) -> None:
+    found = int(np.count_nonzero(~roi.lost))
+    if found < max(settings.keys, 2) + 1:
+        raise GaitInputError(f"only {found} frame(s) with a subject for {settings.keys} "
+                             "key-images; use a longer clip or fewer keys")
+
+
+def _slice(roi: RoiClip, start: int, stop: int) -> RoiClip:
+    return replace(roi, crops=roi.crops[start:stop], centers_xy=roi.centers_xy[start:stop],
+                   lost=roi.lost[start:stop])
+
+
+def _trim(frame_range: tuple[int, int | None] | None, first_frame: int, n: int) -> tuple[int, int]:
+    """Rows ``start, stop`` of the silhouettes that a trim in source frames selects."""
+    if frame_range is None:
+        return 0, n
+    start = int(frame_range[0]) - first_frame
+    stop = n if frame_range[1] is None else int(frame_range[1]) - first_frame
+    if not 0 <= start < stop <= n:
+        last = first_frame + n
+        raise GaitInputError(
+            f"frames {frame_range[0]}:{frame_range[1]} are outside the clip's frames "
+            f"{first_frame}:{last}: choose {first_frame} <= start < stop <= {last}"
+        )
+    return start, stop
 
 
 _STAGE_STEPS = 1000
@@ -250,14 +323,24 @@ def rekey(
         coords,
         settings.keys,
         alpha=settings.alpha,
-        pinned=settings.pinned,
-        forbidden=tuple(sorted(set(settings.forbidden) | set(analysis.lost_frames))),
+        pinned=_rows(settings.pinned, analysis),
+        forbidden=_rows(settings.forbidden + analysis.lost_frames, analysis),
         progress=progress,
         time_limit_s=settings.key_time_limit_s,
     )
-    alternates = None
+    alternates, note = None, None
     if settings.switching:
-        alternates = propose_alternates(coords, selection.frames, theta=analysis.loop_angle)
-    return replace(analysis, settings=settings, selection=selection, alternate_frames=alternates)
+        try:
+            rows = propose_alternates(coords, selection.frames, theta=analysis.loop_angle,
+                                      period_frames=analysis.diagnosis.period_frames)
+            alternates = tuple(r + analysis.first_frame for r in rows)
+        except GaitInputError as exc:
+            note = f"No alternates: {exc}."
+    return replace(analysis, settings=settings, selection=selection, alternate_frames=alternates,
+                   alternates_note=note)
 
 
+def _rows(frames: tuple[int, ...], analysis: Analysis) -> tuple[int, ...]:
+    """Source frames that lie in the analysed range, as its rows (sorted, once each)."""
+    start, stop = analysis.frame_range
+    return tuple(sorted({f - start for f in frames if start <= f < stop}))

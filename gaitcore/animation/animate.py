@@ -34,6 +34,8 @@ class AnalysisRecord:
 
     Read from ``analysis.json`` (:func:`gaitcore.io.analysis_file.read_analysis_json`) or made
     from an analysis in memory (:meth:`from_analysis`); the numbers are the same either way.
+    Frames (``key_frames``, ``alternate_frames``, pose keys) are source frame numbers; the
+    arrays have one row per analysed frame, row 0 being ``first_frame`` (:meth:`rows`).
     """
 
     n_frames: int
@@ -45,6 +47,17 @@ class AnalysisRecord:
     alpha: float
     period_frames: float = float("nan")
     """Gait period found by the diagnosis (NaN when the file has none): loops are cut at it."""
+    first_frame: int = 0
+    fps: float | None = None
+    """Frame rate of the clip, None when the file does not know it."""
+
+    def rows(self, frames: tuple[int, ...] | list[int]) -> tuple[int, ...]:
+        """Rows of the arrays for source ``frames``."""
+        return tuple(int(f) - self.first_frame for f in frames)
+
+    def rows_of(self, poses: dict[int, np.ndarray]) -> dict[int, np.ndarray]:
+        """``poses`` keyed by row instead of source frame."""
+        return {int(f) - self.first_frame: p for f, p in poses.items()}
 
     @classmethod
     def from_analysis(cls, analysis: Analysis) -> AnalysisRecord:
@@ -55,7 +68,8 @@ class AnalysisRecord:
                    tuple(int(f) for f in analysis.key_frames),
                    None if analysis.alternate_frames is None
                    else tuple(int(f) for f in analysis.alternate_frames),
-                   float(analysis.settings.alpha), float(analysis.diagnosis.period_frames))
+                   float(analysis.settings.alpha), float(analysis.diagnosis.period_frames),
+                   first_frame=int(analysis.first_frame))
 
 
 def animate_record(
@@ -72,10 +86,11 @@ def animate_record(
     ----------
     record : AnalysisRecord
     poses : dict of int to ndarray of shape (k,)
-        Pose of every key frame (and alternate frame, with ``alternates``); any other frame
-        is refused.
+        Pose of every key frame (and alternate frame, with ``alternates``) by source frame
+        number; any other frame is refused.
     alternates : tuple of int, optional
-        The alternates to animate with (switching models); None animates with the keys alone.
+        The alternates (source frames) to animate with (switching models); None animates
+        with the keys alone.
     filtered : bool
         Drive the animation with the band-pass filtered trajectories.
     clamp : (float, float), optional
@@ -84,6 +99,7 @@ def animate_record(
     Returns
     -------
     ndarray of shape (n_frames, k)
+        One pose per analysed frame (row 0 is source frame ``record.first_frame``).
 
     Raises
     ------
@@ -97,7 +113,8 @@ def animate_record(
             f"frame(s) {extra} are not key-images of this analysis (keys {list(record.key_frames)}"
             + (f", alternates {list(alternates)}" if alternates else "") + ")")
     coords = record.filtered_projections if filtered else record.projections
-    return animate(coords, record.key_frames, poses, alternate_frames=alternates,
+    return animate(coords, record.rows(record.key_frames), record.rows_of(poses),
+                   alternate_frames=record.rows(alternates) if alternates else None,
                    theta=record.loop_angle, alpha=record.alpha, clamp=clamp)
 
 

@@ -4,6 +4,11 @@ A :class:`FrameSource` gives random access to the frames of a clip, with a small
 cache, and streams them in order without holding the clip in memory. ``open_frames`` picks
 the backend from the path; every failure to read becomes a one-line ``GaitInputError``.
 
+A video is decoded forward once when it is opened: its length is the number of frames that
+decode, whatever its header says (a header that counts more or fewer frames than the stream
+holds only earns a ``note``), and the timestamp of every frame is kept so that a seek which
+lands on another frame than asked is caught and completed by decoding forward.
+
 Frames are BGR ``uint8`` arrays of shape (rows, cols, 3), numbered from 0 at the first frame
 of the (possibly trimmed) clip; ``FrameSource.source_index`` maps back to the file.
 """
@@ -30,9 +35,15 @@ from gaitcore.footage.image_folder import (
 
 
 class _VideoReader:
-    """Sequential decoder over one ``cv2.VideoCapture`` that seeks only when it must."""
+    """Decoder over one ``cv2.VideoCapture`` that seeks only when it must, and checks where
+    every seek landed against the timestamps found by decoding forward.
 
-    def __init__(self, path: Path) -> None:
+    A container's seek may land on another frame than asked (a wrong index, a header that
+    undercounts), or fail; the frame's timestamp then tells where the decoder stands, and it
+    decodes forward from there (or from the start) to the frame asked for.
+    """
+
+    def __init__(self, path: Path, timestamps_ms: np.ndarray | None = None) -> None:
         self.path = path
         self.cap = cv2.VideoCapture(str(path))
         if not self.cap.isOpened():
@@ -47,13 +58,47 @@ class _VideoReader:
                 "OpenCV cannot read; re-encode it (e.g. ffmpeg -i IN -c:v libx264 OUT.mp4)"
             )
         self.next_index = 0
+        self.timestamps_ms = timestamps_ms
+        # Seeking is checked by timestamp, so it needs distinct, increasing ones.
+        self.seekable = timestamps_ms is not None and bool(np.all(np.diff(timestamps_ms) > 0))
+
+    def scan(self) -> tuple[np.ndarray | None, np.ndarray]:
+        """Decode the whole file forward from the start: (first frame, timestamp per frame)."""
+        ok, first = self.cap.read()
+        if not ok:
+            return None, np.zeros(0)
+        stamps = [self.cap.get(cv2.CAP_PROP_POS_MSEC)]
+        while self.cap.grab():
+            stamps.append(self.cap.get(cv2.CAP_PROP_POS_MSEC))
+        self.next_index = -1
+        return first, np.asarray(stamps, dtype=float)
 
     def read(self, index: int) -> np.ndarray | None:
-        if index != self.next_index:
+        if index != self.next_index and self.seekable:
             self.cap.set(cv2.CAP_PROP_POS_FRAMES, index)
+            ok, frame = self.cap.read()
+            landed = self._index_at(self.cap.get(cv2.CAP_PROP_POS_MSEC)) if ok else None
+            if landed == index:
+                self.next_index = index + 1
+                return frame
+            self.next_index = -1 if landed is None or landed > index else landed + 1
+        if not 0 <= self.next_index <= index:  # decode again from the start
+            self.cap.set(cv2.CAP_PROP_POS_FRAMES, 0)
+            self.next_index = 0
+        while self.next_index < index:
+            if not self.cap.grab():
+                self.next_index = -1
+                return None
+            self.next_index += 1
         ok, frame = self.cap.read()
         self.next_index = index + 1 if ok else -1
         return frame if ok else None
+
+    def _index_at(self, stamp_ms: float) -> int | None:
+        """The frame whose forward-decoded timestamp is ``stamp_ms`` (None: no such frame)."""
+        stamps = self.timestamps_ms
+        k = int(np.searchsorted(stamps, stamp_ms - 0.5))
+        return k if k < len(stamps) and abs(stamps[k] - stamp_ms) <= 0.5 else None
 
     def close(self) -> None:
         self.cap.release()
@@ -76,6 +121,9 @@ class FrameSource:
         The clip is source frames ``start`` (included) to ``stop`` (excluded).
     fps : float or None
         Frame rate from the video header; None for image folders unless given.
+    note : str or None
+        What the user should know about how the file was read (its header promised another
+        number of frames than decode), None otherwise.
 
     Notes
     -----
@@ -94,8 +142,12 @@ class FrameSource:
         start: int,
         stop: int,
         cache_frames: int,
+        timestamps_ms: np.ndarray | None = None,
+        note: str | None = None,
     ) -> None:
         self.path = path
+        self.note = note
+        self._timestamps_ms = timestamps_ms
         self._files = files
         self.n_source = n_source
         self._size = size
@@ -165,12 +217,13 @@ class FrameSource:
                 img = read_image(self._files[self.start + i], self._size)
             else:
                 if self._reader is None:
-                    self._reader = _VideoReader(self.path)
+                    self._reader = _VideoReader(self.path, self._timestamps_ms)
                 img = self._reader.read(self.start + i)
                 if img is None:
                     raise GaitInputError(
-                        f"frame {self.start + i} of {self.path} cannot be decoded: the file is "
-                        "truncated or damaged; trim the clip before it (stop=) or re-encode it"
+                        f"frame {self.start + i} of {self.path} cannot be decoded any more (it "
+                        "did when the file was opened): the file changed or is damaged; "
+                        "open it again or re-encode it"
                     )
                 check_size(img, self._size, f"frame {self.start + i} of {self.path}")
             img.flags.writeable = False
@@ -220,17 +273,15 @@ class FrameSource:
             for i in range(start, stop):
                 yield i, read_image(self._files[self.start + i], self._size)
             return
-        reader = _VideoReader(self.path)
+        reader = _VideoReader(self.path, self._timestamps_ms)
         try:
-            if start + self.start:
-                reader.cap.set(cv2.CAP_PROP_POS_FRAMES, self.start + start)
             for i in range(start, stop):
-                ok, img = reader.cap.read()
-                if not ok:
+                img = reader.read(self.start + i)
+                if img is None:
                     raise GaitInputError(
-                        f"frame {self.start + i} of {self.path} cannot be decoded: the file is "
-                        f"truncated or damaged; trim the clip with stop={self.start + i} or "
-                        "re-encode it"
+                        f"frame {self.start + i} of {self.path} cannot be decoded any more (it "
+                        "did when the file was opened): the file changed or is damaged; "
+                        "open it again or re-encode it"
                     )
                 check_size(img, self._size, f"frame {self.start + i} of {self.path}")
                 yield i, img
@@ -282,7 +333,7 @@ def open_frames(
     Raises
     ------
     GaitInputError
-        Missing path; unreadable, truncated or undecodable file; zero frames; empty folder;
+        Missing path; unreadable or undecodable file; zero frames; empty folder;
         non-image files or images of different sizes in a folder; a bad frame range.
     """
     p = Path(path)
@@ -298,6 +349,22 @@ def open_frames(
         return FrameSource(p, files=files, n_source=n_source, size=size, fps=fps,
                            start=s0, stop=s1, cache_frames=cache_frames)
     return _open_video(p, start, stop, fps, cache_frames)
+
+
+def video_fps(path: str | os.PathLike) -> float | None:
+    """The frame rate a video's header gives (None when it gives none), without decoding it.
+
+    Raises
+    ------
+    GaitInputError
+        When the file cannot be opened.
+    """
+    reader = _VideoReader(Path(path))
+    try:
+        fps = float(reader.cap.get(cv2.CAP_PROP_FPS))
+    finally:
+        reader.close()
+    return fps if fps > 0 and np.isfinite(fps) else None
 
 
 # -- helpers ---------------------------------------------------------------------------
@@ -343,11 +410,15 @@ def _prefetched(items: Iterator, depth: int) -> Iterator:
 
 def _open_video(p: Path, start: int, stop: int | None, fps: float | None,
                 cache_frames: int) -> FrameSource:
+    """Open a video by decoding it forward once: the frame count is what decodes, never what
+    the header says nor what a seek to the end returns."""
     reader = _VideoReader(p)
     try:
         cap = reader.cap
-        first = reader.read(0)
-        if first is None and int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == 0:
+        n_header = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
+        header_fps = float(cap.get(cv2.CAP_PROP_FPS))
+        first, stamps = reader.scan()
+        if first is None and n_header <= 0:
             raise GaitInputError(f"{p} holds no frames (an empty video): choose another file")
         if first is None:
             code = int(cap.get(cv2.CAP_PROP_FOURCC))
@@ -356,34 +427,19 @@ def _open_video(p: Path, start: int, stop: int | None, fps: float | None,
                 f"{p} opens but none of its frames decode (codec {fourcc or 'unknown'}, or no "
                 "video stream): re-encode it to H.264 or MJPEG, or export the frames as images"
             )
-        size = (int(first.shape[1]), int(first.shape[0]))
-        header_fps = float(cap.get(cv2.CAP_PROP_FPS))
-        n_header = int(cap.get(cv2.CAP_PROP_FRAME_COUNT))
-        n_source = n_header if n_header > 0 else _count_frames(reader)
-        s0, s1 = _check_range(start, stop, n_source, p)
-        # A header may promise frames that a truncated file no longer holds: check the last
-        # frame of the clip now rather than fail in the middle of an analysis.
-        if reader.read(s1 - 1) is None:
-            n_real = _count_frames(reader)
-            raise GaitInputError(
-                f"{p} is truncated: its header says {n_source} frames but only {n_real} decode; "
-                f"open it with stop={n_real} or re-encode it"
-            )
     finally:
         reader.close()
+    n_source = len(stamps)
+    note = None
+    if n_header > 0 and n_header != n_source:
+        note = (f"{p.name}: its header says {n_header} frames but {n_source} decode; all "
+                f"{n_source} are used")
+    s0, s1 = _check_range(start, stop, n_source, p)
     if fps is None and header_fps > 0 and np.isfinite(header_fps):
         fps = header_fps
-    return FrameSource(p, files=None, n_source=n_source, size=size, fps=fps,
-                       start=s0, stop=s1, cache_frames=cache_frames)
-
-
-def _count_frames(reader: _VideoReader) -> int:
-    reader.cap.set(cv2.CAP_PROP_POS_FRAMES, 0)
-    n = 0
-    while reader.cap.grab():
-        n += 1
-    reader.next_index = -1
-    return n
+    size = (int(first.shape[1]), int(first.shape[0]))
+    return FrameSource(p, files=None, n_source=n_source, size=size, fps=fps, start=s0, stop=s1,
+                       cache_frames=cache_frames, timestamps_ms=stamps, note=note)
 
 
 def _check_range(start: int, stop: int | None, n: int, p: Path) -> tuple[int, int]:

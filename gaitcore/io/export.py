@@ -3,7 +3,8 @@
 ``EXPORTERS`` maps a suffix to an :class:`Exporter`: ``.csv`` (curves with ``frame,time_s``
 then one column per channel), ``.bvh`` (Biovision hierarchy) and ``.glb`` (binary glTF with a
 skinned mesh). :func:`export_animation` picks one from the path. :func:`write_preview_video`
-writes the footage beside a render of the predicted skeleton, to judge the result at a glance.
+writes the footage at its own size with the predicted skeleton drawn over it where the artist
+fitted it, beside a side render of the skeleton, to judge the result at a glance.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from gaitcore.errors import GaitInputError
@@ -117,7 +119,6 @@ def export_animation(path: str | Path, skeleton: Skeleton | None, table: PoseTab
 # ---------------------------------------------------------------- preview video
 VIDEO_CODECS = (("mp4v", None), ("MJPG", ".avi"))
 """FourCC codes tried in turn, with the suffix forced on the file (None keeps the asked one)."""
-PANEL_BACKGROUND = (40, 40, 40)
 
 
 @dataclass(frozen=True)
@@ -143,9 +144,11 @@ class PreviewVideo:
 
 def write_preview_video(path: str | Path, footage_frames: Iterable[np.ndarray],
                         skeleton: Skeleton, poses: np.ndarray, fps: float = 24.0, *,
-                        size: tuple[int, int] = (320, 240), view_height_m: float | None = None,
+                        footage_from_world: np.ndarray | None = None,
+                        view_height_m: float | None = None,
                         progress: Progress | None = None) -> PreviewVideo:
-    """Write the footage (left) beside a side render of the predicted skeleton (right).
+    """Write the footage at its own size with the posed skeleton drawn over it, and a side
+    render of the skeleton beside it, to judge the result at a glance.
 
     Parameters
     ----------
@@ -153,21 +156,22 @@ def write_preview_video(path: str | Path, footage_frames: Iterable[np.ndarray],
         Output video, normally ``.mp4`` (codec mp4v). When this OpenCV cannot encode mp4v,
         an MJPG ``.avi`` is written next to it instead and ``note`` says so.
     footage_frames : iterable of ndarray
-        Frames in clip order: BGR uint8 (H, W, 3), or grey / binary masks (H, W). Each is
-        fitted into its panel keeping its aspect ratio. At least ``len(poses)`` are needed;
-        frames past that are not read.
+        Frames in clip order: BGR uint8 (H, W, 3), or grey / binary masks (H, W), all of one
+        size. At least ``len(poses)`` are needed; frames past that are not read.
     skeleton : Skeleton
         Must have bones to draw (see :meth:`Skeleton.bone_ellipsoids`).
     poses : ndarray of shape (n, k)
         Predicted pose per frame, laid out as ``skeleton.channel_names``.
     fps : float
-    size : (int, int)
-        Width and height of each panel in pixels; the video is twice as wide.
+    footage_from_world : ndarray of shape (n, 2, 3), optional
+        Per frame, the affine map from the skeleton's side view (world X, Y, metres) to
+        footage pixels: where the artist fitted the footage behind the skeleton
+        (:func:`gaitcore.project.footage_fit.footage_from_world`). Without it, no skeleton
+        is drawn over the footage.
     view_height_m : float, optional
-        World height seen by the skeleton camera; by default 1.4 times the skeleton's rest
-        height.
+        World height of the side view; by default 1.4 times the skeleton's rest height.
     progress : callable (done, total) -> bool, optional
-        Called before each frame and at the end; returning False cancels.
+        Called before each frame and at the end; False cancels.
 
     Returns
     -------
@@ -176,56 +180,115 @@ def write_preview_video(path: str | Path, footage_frames: Iterable[np.ndarray],
     Raises
     ------
     GaitInputError
-        Bad poses, size or frame rate, fewer footage frames than poses, or no usable codec.
+        Bad poses, maps or frame rate, fewer footage frames than poses, frames of several
+        sizes, or no usable codec.
     Cancelled
         ``progress`` returned False; the partial file is removed.
     """
-    import cv2
-
-    from gaitcore.rig.render import SkeletonRenderer
-
     p = np.asarray(poses, dtype=float)
     if p.ndim != 2 or p.shape[0] == 0:
         raise GaitInputError(f"poses must have shape (frames, channels), got {p.shape}")
     if not (np.isfinite(fps) and fps > 0):
         raise GaitInputError(f"frame rate must be a positive number, got {fps}")
-    width, height = (int(v) for v in size)
+    if footage_from_world is not None and np.shape(footage_from_world) != (len(p), 2, 3):
+        raise GaitInputError(f"footage_from_world must have shape ({len(p)}, 2, 3), got "
+                             f"{np.shape(footage_from_world)}")
     world = skeleton.forward_kinematics(p)
     if view_height_m is None:
-        rest = skeleton.joint_positions(skeleton.rest_pose())
-        view_height_m = 1.4 * float(np.ptp(rest[:, 1])) or 2.9
-    with SkeletonRenderer(skeleton, width=width, height=height,
-                          view_height_m=view_height_m) as renderer:
-        writer, used, note = _open_writer(Path(path), fps, (2 * width, height))
-        done = 0
+        view_height_m = 1.4 * float(np.ptp(skeleton.joint_positions(skeleton.rest_pose())[:, 1])) or 2.9
+    frames = iter(footage_frames)
+    first = next(frames, None)
+    if first is None:
+        raise GaitInputError(f"the footage has no frames for the {len(p)} poses; give the clip")
+    return _encode(Path(path), first, frames, skeleton, world, fps, footage_from_world,
+                   view_height_m, progress)
+
+
+def _encode(path: Path, first: np.ndarray, frames, skeleton: Skeleton, world: np.ndarray,
+            fps: float, maps: np.ndarray | None, view_height_m: float,
+            progress: Progress | None) -> PreviewVideo:
+    """Render and write every frame of the preview (see :func:`write_preview_video`)."""
+    n = len(world)
+    height, width = _as_bgr(first).shape[:2]
+    side = (max(16, round(height * 4 / 3)), max(16, height))
+    renderer = _side_renderer(skeleton, side, view_height_m)
+    try:
+        writer, used, note = _open_writer(path, fps, (width + side[0], height))
         try:
-            frames = iter(footage_frames)
-            for done in range(len(p)):
-                report(progress, done, len(p),
-                       f"preview video cancelled at frame {done} of {len(p)}")
-                image = next(frames, None)
-                if image is None:
-                    raise GaitInputError(f"the footage has {done} frames but there are {len(p)} "
-                                         "poses; give the clip the animation was made from")
-                rgb, _ = renderer.render_world(world[done])
-                panel = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
-                cv2.putText(panel, f"frame {done}", (6, height - 8), cv2.FONT_HERSHEY_SIMPLEX,
-                            0.4, (30, 30, 30), 1, cv2.LINE_AA)
-                writer.write(np.hstack([_fit(image, width, height), panel]))
+            for done, image in enumerate(_paired(first, frames, n)):
+                report(progress, done, n, f"preview video cancelled at frame {done} of {n}")
+                affine = None if maps is None else maps[done]
+                writer.write(_preview_frame(image, done, skeleton, world[done], affine, renderer,
+                                            (width, height)))
         except BaseException:
             writer.release()
             used[0].unlink(missing_ok=True)
             raise
         writer.release()
+    finally:
+        renderer.close()
     if progress is not None:
-        progress(len(p), len(p))
-    return PreviewVideo(used[0], used[1], len(p), note)
+        progress(n, n)
+    return PreviewVideo(used[0], used[1], n, note)
+
+
+def _paired(first: np.ndarray, rest, n: int):
+    """The first ``n`` footage frames; a shorter footage raises when it runs out."""
+    image = first
+    for done in range(n):
+        if image is None:
+            raise GaitInputError(f"the footage has {done} frames but there are {n} poses; give "
+                                 "the clip the animation was made from")
+        yield image
+        image = next(rest, None) if done + 1 < n else None
+
+
+def _preview_frame(image: np.ndarray, index: int, skeleton: Skeleton, world: np.ndarray,
+                   affine: np.ndarray | None, renderer, size: tuple[int, int]) -> np.ndarray:
+    """One frame of the preview: the footage with the skeleton over it, the side view beside."""
+    view = _as_bgr(image).copy()
+    if (view.shape[1], view.shape[0]) != size:
+        raise GaitInputError(f"footage frame {index} is {view.shape[1]}x{view.shape[0]} but the "
+                             f"first is {size[0]}x{size[1]}: give frames of one size")
+    if affine is not None:
+        _draw_skeleton(view, skeleton, world, affine)
+    rgb, _ = renderer.render_world(world)
+    panel = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
+    cv2.putText(panel, f"frame {index}", (6, panel.shape[0] - 8), cv2.FONT_HERSHEY_SIMPLEX,
+                0.4, (30, 30, 30), 1, cv2.LINE_AA)
+    return np.hstack([view, panel])
+
+
+BONE_COLOUR = (0, 200, 255)
+"""Colour (BGR) of the skeleton drawn over the footage; joints in white."""
+
+
+def _side_renderer(skeleton: Skeleton, size: tuple[int, int], view_height_m: float):
+    from gaitcore.rig.render import SkeletonRenderer
+
+    return SkeletonRenderer(skeleton, width=size[0], height=size[1], view_height_m=view_height_m)
+
+
+def _draw_skeleton(image: np.ndarray, skeleton: Skeleton, world: np.ndarray,
+                   affine: np.ndarray) -> None:
+    """Draw the bones of one pose (joint transforms (J, 4, 4)) over ``image`` in place,
+    through the side-view-to-pixel map ``affine`` (2, 3). The footage is tracked (the animal
+    stays in its window), so the skeleton's travel along X is taken off, as the 3D viewport
+    does by following the root."""
+    xy = world[:, :2, 3].copy()
+    xy[:, 0] -= world[0, 0, 3] - skeleton.offsets[0, 0]
+    uv = xy @ affine[:, :2].T + affine[:, 2]
+    thick = max(1, round(image.shape[0] / 270))
+    points = [tuple(int(round(c)) for c in q) for q in uv]
+    for child, parent in enumerate(skeleton.parents):
+        if parent >= 0:
+            cv2.line(image, points[parent], points[child], BONE_COLOUR, thick + 1, cv2.LINE_AA)
+    for q in points:
+        cv2.circle(image, q, thick + 1, (255, 255, 255), -1, cv2.LINE_AA)
 
 
 def _open_writer(path: Path, fps: float, frame_size: tuple[int, int]):
     """The first codec of ``VIDEO_CODECS`` that opens: (writer, (path, fourcc), note)."""
-    import cv2
-
     path.parent.mkdir(parents=True, exist_ok=True)
     tried = []
     for fourcc, suffix in VIDEO_CODECS:
@@ -244,22 +307,14 @@ def _open_writer(path: Path, fps: float, frame_size: tuple[int, int]):
                          "available in this OpenCV build; install opencv-python with FFmpeg")
 
 
-def _fit(image: np.ndarray, width: int, height: int) -> np.ndarray:
-    """``image`` scaled into a (height, width, 3) BGR panel, aspect kept, centred."""
-    import cv2
-
+def _as_bgr(image: np.ndarray) -> np.ndarray:
+    """A footage frame as BGR uint8 (H, W, 3): colour as is, grey or binary masks expanded."""
     img = np.asarray(image)
     if img.dtype == bool:
         img = img.astype(np.uint8) * 255
-    if img.ndim == 2:
-        img = cv2.cvtColor(img.astype(np.uint8), cv2.COLOR_GRAY2BGR)
+    if img.ndim == 2 and img.dtype == np.uint8:
+        img = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR)
     if img.ndim != 3 or img.shape[2] != 3 or img.dtype != np.uint8:
         raise GaitInputError(f"footage frames must be uint8 images (H, W, 3) or (H, W), got "
                              f"{img.dtype} {img.shape}")
-    scale = min(width / img.shape[1], height / img.shape[0])
-    w, h = max(1, round(img.shape[1] * scale)), max(1, round(img.shape[0] * scale))
-    panel = np.empty((height, width, 3), np.uint8)
-    panel[:] = PANEL_BACKGROUND
-    x, y = (width - w) // 2, (height - h) // 2
-    panel[y:y + h, x:x + w] = cv2.resize(img, (w, h), interpolation=cv2.INTER_AREA)
-    return panel
+    return img

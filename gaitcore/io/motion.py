@@ -46,7 +46,8 @@ class ExportMotion:
     Attributes
     ----------
     frames : ndarray of int, shape (n,)
-        Frame numbers to write: 0..n-1 (a loop's closing frame included).
+        Frame numbers to write: source frames of the whole clip, or 0..n-1 for a loop (its
+        closing frame included).
     poses : ndarray of shape (n, k)
     root_motion : str
         The mode applied (``auto`` resolved).
@@ -74,7 +75,7 @@ class ExportMotion:
 def export_motion(curves: np.ndarray, channel_names: Sequence[str], *,
                   key_poses: Mapping[int, np.ndarray], skeleton: Skeleton | None = None,
                   loop: bool = False, period_frames: float | None = None,
-                  root_motion: str = AUTO, ground_contact: bool = True,
+                  root_motion: str = AUTO, ground_contact: bool = True, first_frame: int = 0,
                   progress: Progress | None = None) -> ExportMotion:
     """Turn interpolated curves into the motion to export.
 
@@ -94,6 +95,9 @@ def export_motion(curves: np.ndarray, channel_names: Sequence[str], *,
     root_motion : {"auto", "in-place", "forward", "as-keys"}
     ground_contact : bool
         Plant the feet (needs ``skeleton``).
+    first_frame : int
+        Source frame of row 0 of ``curves`` (the start of the trim): the whole clip is
+        numbered from it, a loop from 0.
     progress : callable (done, total) -> bool, optional
         Reports the ground contact clean-up; returning False cancels.
 
@@ -131,7 +135,8 @@ def export_motion(curves: np.ndarray, channel_names: Sequence[str], *,
         closing = poses[:1].copy()
         closing[0, horizontal_root_channels(names)] += _stride(names, key_poses, len(still), mode)
         poses = np.concatenate([poses, closing])
-    return ExportMotion(np.arange(len(poses)), poses, mode, start, contact)
+    numbered = np.arange(len(poses)) + (0 if loop else int(first_frame))
+    return ExportMotion(numbered, poses, mode, start, contact)
 
 
 def _check(names: tuple[str, ...], skeleton: Skeleton | None, root_motion: str,

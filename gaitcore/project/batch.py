@@ -216,7 +216,7 @@ def analyze_clip(spec: ClipSpec, out_dir: Path, *,
         try:
             project = _with_box(spec, project)
             project = replace(project, silhouettes=_silhouettes(spec, project))
-            analysis = analyze(project.silhouettes, settings)
+            analysis = analyze(project.silhouettes, settings, trim=project.trim)
             write_analysis_json(tmp / ANALYSIS_NAME, analysis, source=str(spec.path))
             summary = _done(spec, analysis)
         except (GaitInputError, OSError) as exc:
@@ -316,21 +316,26 @@ def _with_box(spec: ClipSpec, project: Project) -> Project:
 
 
 def _silhouettes(spec: ClipSpec, project: Project):
-    """Tracked silhouettes over the trim: a mask folder is tracked, colour is segmented."""
-    with open_source(project) as source:  # checks the footage and the trim
+    """Tracked silhouettes of the whole clip (the cycle search looks at all of it; the trim
+    limits the analysis): a mask folder is tracked, colour is segmented."""
+    with open_source(project) as source:  # checks the footage
         if is_mask_folder(spec.path):
-            return silhouettes_from_masks(spec.path, start=source.start, stop=source.stop)
+            return silhouettes_from_masks(spec.path)
         return segment(source, project)
 
 
 def _done(spec: ClipSpec, analysis: Analysis) -> ClipSummary:
+    """The row of an analysed clip; its best cycle is the first stretch the cycle finder
+    ranks (by r and length), else the analysed range."""
     d = analysis.diagnosis
+    best = analysis.cycles[0].to_dict(analysis.cycle_offset) if analysis.cycles else None
     r = [_rounded(float(v), 4) for v in d.correlations] + [None, None]
     return ClipSummary(
         spec.clip, "done", str(spec.path), spec, frames=analysis.n_frames,
         usable=d.verdict.value == "usable", verdict=d.verdict.value,
         period_frames=_rounded(float(d.period_frames), 3), r1=r[0], r2=r[1],
-        cycle_start=spec.start, cycle_stop=spec.start + analysis.n_frames,
+        cycle_start=best["start"] if best else analysis.first_frame,
+        cycle_stop=best["stop"] if best else analysis.first_frame + analysis.n_frames,
     )
 
 

@@ -179,7 +179,9 @@ class Project:
         Video file or image folder (absolute in memory; the project file stores it relative
         to itself). None for an empty project.
     frame_start, frame_stop : int, int or None
-        The clip is source frames ``frame_start <= f < frame_stop`` (None: to the end).
+        The trim (the in and out marks): the analysis, the animation and the exports use
+        source frames ``frame_start <= f < frame_stop`` (None: to the end). The footage is
+        opened whole and every frame number of the project is a source frame number.
     fps : float or None
         Frame rate to use instead of the file's (image folders have none).
     subject_rects, background_rects : tuple of Rect
@@ -239,6 +241,21 @@ class Project:
         return all(_field_equal(k, getattr(self, k), getattr(other, k)) for k in names)
 
     __hash__ = None  # type: ignore[assignment]
+
+    @property
+    def trim(self) -> tuple[int, int | None]:
+        """``(frame_start, frame_stop)``: the source frames analysed, stop excluded."""
+        return self.frame_start, self.frame_stop
+
+    def with_trim(self, start: int, stop: int | None) -> Project:
+        """A copy trimmed to source frames ``start <= f < stop`` (None: to the end).
+
+        Raises
+        ------
+        GaitInputError
+            An empty or negative range.
+        """
+        return replace(self, frame_start=int(start), frame_stop=None if stop is None else int(stop))
 
     # -- queries ----------------------------------------------------------------------
     def strokes_on(self, frame: int) -> tuple[Stroke, ...]:

@@ -119,19 +119,13 @@ def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
     if img.ndim == 2:
         img = cv2.cvtColor(img.astype(np.uint8), cv2.COLOR_GRAY2BGR)
     rows, cols = img.shape[:2]
-    window = silhouettes.window_xywh(frame) if silhouettes is not None and frame < silhouettes.n_frames else None
-    if height_px is None and silhouettes is not None:
-        height_px = silhouette_height_px(silhouettes)
-    if window is not None and height_px:
-        u0, v0 = (float(v) for v in silhouettes.roi.centers_xy[frame])
-        metres_per_px = skeleton.height_m / height_px
+    (u0, v0), metres_per_px, window = _anchor(frame, skeleton, silhouettes, (cols, rows), height_px)
+    if window is not None:
         x, y, w, h = window
         cx, cy, w, h = x + w / 2, y + h / 2, w * CONTEXT, h * CONTEXT
         x0, x1 = int(max(0, cx - w / 2)), int(min(cols, cx + w / 2))
         y0, y1 = int(max(0, cy - h / 2)), int(min(rows, cy + h / 2))
     else:
-        u0, v0 = cols / 2, rows / 2
-        metres_per_px = skeleton.height_m / (FALLBACK_HEIGHT_SHARE * rows)
         x0, x1, y0, y1 = 0, cols, 0, rows
     if x1 - x0 < 2 or y1 - y0 < 2:
         x0, x1, y0, y1 = 0, cols, 0, rows
@@ -156,3 +150,59 @@ def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
         [0, 0, 0, 1.0],
     ])
     return ReferenceImage(data, transform)
+
+
+def _anchor(frame: int, skeleton: SkeletonExtent, silhouettes: Silhouettes | None,
+            size: tuple[int, int], height_px: float | None):
+    """The source pixel that lands on the skeleton's centre, the metres per source pixel of
+    the automatic placement, and the ROI window of ``frame`` (None when it has none)."""
+    cols, rows = size
+    window = silhouettes.window_xywh(frame) if silhouettes is not None and frame < silhouettes.n_frames else None
+    if height_px is None and silhouettes is not None:
+        height_px = silhouette_height_px(silhouettes)
+    if window is not None and height_px:
+        u0, v0 = (float(v) for v in silhouettes.roi.centers_xy[frame])
+        return (u0, v0), skeleton.height_m / height_px, window
+    return (cols / 2, rows / 2), skeleton.height_m / (FALLBACK_HEIGHT_SHARE * rows), None
+
+
+def footage_from_world(frame: int, skeleton: SkeletonExtent, silhouettes: Silhouettes | None,
+                       size: tuple[int, int], *, fit: FootageFit = FootageFit(),
+                       height_px: float | None = None) -> np.ndarray:
+    """The affine map from the skeleton's side view (world X, Y in metres) to source pixels
+    of frame ``frame``: the inverse of the placement of :func:`reference_image`, so that a
+    skeleton drawn with it sits on the footage as it does in the 3D viewport.
+
+    Parameters
+    ----------
+    frame : int
+        Source frame (its silhouette gives the anchor).
+    skeleton : SkeletonExtent
+    silhouettes : Silhouettes or None
+    size : (int, int)
+        Width and height of the frame, pixels.
+    fit : FootageFit
+    height_px : float, optional
+        :func:`silhouette_height_px` of ``silhouettes``, when already computed.
+
+    Returns
+    -------
+    ndarray of shape (2, 3)
+        ``[u, v] = A @ [X, Y, 1]``.
+    """
+    (u0, v0), metres_per_px, _ = _anchor(frame, skeleton, silhouettes, size, height_px)
+    s = metres_per_px * fit.scale
+    sign = -1.0 if fit.flip else 1.0
+    x0, y0 = skeleton.center_xy[0] + fit.offset_x_m, skeleton.center_xy[1] + fit.offset_y_m
+    return np.array([[sign / s, 0.0, u0 - sign * x0 / s],
+                     [0.0, -1.0 / s, v0 + y0 / s]])
+
+
+def footage_maps(frames: list[int] | range, skeleton: Skeleton, silhouettes: Silhouettes | None,
+                 size: tuple[int, int], fit: FootageFit = FootageFit()) -> np.ndarray:
+    """:func:`footage_from_world` of each of ``frames`` (source frames), shape (n, 2, 3): what
+    :func:`gaitcore.io.export.write_preview_video` needs to draw the skeleton over the footage."""
+    extent = skeleton_extent(skeleton)
+    height = silhouette_height_px(silhouettes) if silhouettes is not None else None
+    return np.stack([footage_from_world(f, extent, silhouettes, size, fit=fit, height_px=height)
+                     for f in frames])

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gaitcore.analysis.alternates import swap_warning
 from gaitcore.analysis.analyze import Analysis, AnalysisSettings, analyze_silhouettes, rekey
 from gaitcore.animation.animate import AnalysisRecord, animate_record
 from gaitcore.animation.weights import InterpolationWeights, interpolation_weights, loop_cycle
@@ -36,6 +37,7 @@ __all__ = [
     "Animation", "CLAMP_RANGE", "CENTIMETRE_RIG_M", "alternates_in_use", "analyze",
     "animate_project", "frame_rate", "frames_to_pose", "missing_poses", "open_source",
     "read_rig", "rekey", "segment", "silhouettes_from_masks", "sketched_silhouettes",
+    "swap_warning_for",
 ]
 
 CLAMP_RANGE = (0.0, 1.0)
@@ -46,7 +48,8 @@ CENTIMETRE_RIG_M = 10.0
 
 # -- footage ---------------------------------------------------------------------------------
 def open_source(project: Project) -> FrameSource | None:
-    """The footage of ``project`` over its frame range (None when it has none).
+    """The footage of ``project``, whole: the trim only limits the analysis, and every frame
+    number of the project is a source frame number. None when it has none.
 
     Raises
     ------
@@ -55,13 +58,13 @@ def open_source(project: Project) -> FrameSource | None:
     """
     if project.footage is None:
         return None
-    return open_frames(project.footage, start=project.frame_start, stop=project.frame_stop,
-                       fps=project.fps)
+    return open_frames(project.footage, fps=project.fps)
 
 
 def frame_rate(project: Project, source: FrameSource | None) -> float:
-    """Frames per second of the clip: the footage's, else the project's, else the default."""
-    return float((source.fps if source is not None else None) or project.fps or DEFAULT_FPS)
+    """Frames per second of the clip: the project's (set by the artist), else the footage's,
+    else :data:`~gaitcore.footage.sources.DEFAULT_FPS`."""
+    return float(project.fps or (source.fps if source is not None else None) or DEFAULT_FPS)
 
 
 # -- silhouettes -----------------------------------------------------------------------------
@@ -103,13 +106,32 @@ def sketched_silhouettes(project: Project, n_frames: int, shape_rc: tuple[int, i
 
 # -- analysis --------------------------------------------------------------------------------
 def analyze(silhouettes: Silhouettes, settings: AnalysisSettings,
-            progress: Progress | None = None) -> Analysis:
-    """The analysis step of the paper (Sections 2.3, 3.1, 3.2, 5.2) on silhouettes.
+            progress: Progress | None = None, *, first_frame: int = 0,
+            trim: tuple[int, int | None] | None = None) -> Analysis:
+    """The analysis step of the paper (Sections 2.3, 3.1, 3.2, 5.2) on the trimmed
+    silhouettes, and the stretches of steady gait of all of them.
+
+    Parameters
+    ----------
+    silhouettes : Silhouettes
+    settings : AnalysisSettings
+    progress : callable(done, total) -> bool, optional
+    first_frame : int
+        Source frame of the first silhouette (when they are of part of a clip).
+    trim : (int, int or None), optional
+        Source frames ``start <= f < stop`` to analyse (the project's trim); a stop past the
+        silhouettes means their end. None: all.
 
     To choose the keys again on the same silhouettes, call :func:`rekey` instead: it reuses
     the PCA.
     """
-    return analyze_silhouettes(silhouettes.roi, settings, sketched=silhouettes.origin == "sketched",
+    frame_range = None
+    if trim is not None:
+        end = first_frame + silhouettes.n_frames
+        stop = end if trim[1] is None else min(trim[1], end)
+        frame_range = (min(trim[0], max(first_frame, stop - 1)), stop)
+    return analyze_silhouettes(silhouettes.roi, settings, first_frame=first_frame,
+                               frame_range=frame_range, sketched=silhouettes.origin == "sketched",
                                progress=progress)
 
 
@@ -165,18 +187,21 @@ class Animation:
     Attributes
     ----------
     curves : ndarray of shape (n, k)
-        A pose per clip frame, laid out as ``skeleton.channel_names``.
+        A pose per analysed frame (the trim), laid out as ``skeleton.channel_names``.
     weights : InterpolationWeights
     options : AnimationOptions
     skeleton : Skeleton
     cycle_start : int
-        First clip frame of the loop cycle (0 without ``options.loop``).
+        Row of ``curves`` where the loop cycle starts (0 without ``options.loop``).
     cycle : ndarray of shape (P, k) or None
         The loop cycle when ``options.loop``.
     key_poses : dict of int to ndarray of shape (k,)
-        The posed frames animated from (their root positions give the export's speed).
+        The posed frames animated from, by row of ``curves`` (their root positions give the
+        export's speed; their feet anchor the ground contact).
     period_frames : float
         Gait period the loop is cut at.
+    first_frame : int
+        Source frame of row 0 of ``curves`` (the start of the trim).
     """
 
     curves: np.ndarray
@@ -187,12 +212,15 @@ class Animation:
     cycle: np.ndarray | None = None
     key_poses: dict[int, np.ndarray] = field(default_factory=dict)
     period_frames: float = float("nan")
+    first_frame: int = 0
 
     def pose_at(self, frame: int) -> np.ndarray:
-        """The pose shown at clip frame ``frame`` (the loop repeats in step with the clip)."""
+        """The pose shown at source frame ``frame`` (the loop repeats in step with the clip;
+        outside the trim, the nearest end's pose)."""
+        row = frame - self.first_frame
         if self.cycle is not None:
-            return self.cycle[(frame - self.cycle_start) % len(self.cycle)]
-        return self.curves[min(max(frame, 0), len(self.curves) - 1)]
+            return self.cycle[(row - self.cycle_start) % len(self.cycle)]
+        return self.curves[min(max(row, 0), len(self.curves) - 1)]
 
     def export_motion(self, progress: Progress | None = None) -> ExportMotion:
         """The motion the exporters write, as ``gaitcore animate`` makes it: loop or clip,
@@ -202,13 +230,15 @@ class Animation:
                              skeleton=self.skeleton, loop=self.options.loop,
                              period_frames=self.period_frames,
                              root_motion=self.options.root_motion,
-                             ground_contact=self.options.ground_contact, progress=progress)
+                             ground_contact=self.options.ground_contact,
+                             first_frame=self.first_frame, progress=progress)
 
     def exported(self) -> tuple[np.ndarray, np.ndarray]:
-        """Frame numbers and poses to export: every clip frame, or the cycle from 0."""
+        """Source frame numbers and poses to export: every analysed frame, or the cycle
+        numbered from 0."""
         if self.cycle is not None:
             return np.arange(len(self.cycle)), self.cycle
-        return np.arange(len(self.curves)), self.curves
+        return self.first_frame + np.arange(len(self.curves)), self.curves
 
 
 def animate_project(project: Project, analysis: Analysis | None, skeleton: Skeleton,
@@ -236,10 +266,22 @@ def animate_project(project: Project, analysis: Analysis | None, skeleton: Skele
     curves = animate_record(record, poses, alternates=alternates, filtered=options.filtered,
                             clamp=clamp)
     coords = record.filtered_projections if options.filtered else record.projections
-    weights = interpolation_weights(coords, record.key_frames, alternate_frames=alternates,
-                                    theta=record.loop_angle, alpha=record.alpha, clamp=clamp)
+    weights = interpolation_weights(
+        coords, record.rows(record.key_frames),
+        alternate_frames=record.rows(alternates) if alternates else None,
+        theta=record.loop_angle, alpha=record.alpha, clamp=clamp)
     start, cycle = 0, None
     if options.loop:
         start, cycle = loop_cycle(curves, analysis.diagnosis.period_frames)
-    return Animation(curves, weights, options, skeleton, start, cycle, poses,
-                     float(analysis.diagnosis.period_frames))
+    return Animation(curves, weights, options, skeleton, start, cycle, record.rows_of(poses),
+                     float(analysis.diagnosis.period_frames), record.first_frame)
+
+
+def swap_warning_for(project: Project, analysis: Analysis | None) -> str | None:
+    """The warning of :func:`gaitcore.analysis.alternates.swap_warning` for the alternates the
+    artist accepted (None when switching is off or they are fine)."""
+    alternates = alternates_in_use(project, analysis)
+    if analysis is None or not alternates:
+        return None
+    return swap_warning(analysis.loop_angle, analysis.rows(analysis.key_frames),
+                        analysis.rows(alternates))

@@ -3,7 +3,9 @@
 ``horse.gaitproj`` holds everything small (footage path, rectangles, strokes, settings, keys)
 as JSON with ``"format"`` and ``"version"``; ``horse.gaitproj.d/`` beside it holds the
 silhouette arrays as ``.npy`` files named after their content (the crops packed 8 pixels to a
-byte since version 2; version 1 files, with one byte per pixel, are still read). Saving is atomic: arrays are
+byte since version 2; version 1 files, with one byte per pixel, are still read). Since
+version 3, ``frame_start`` and ``frame_stop`` are the trim over the whole footage; older files
+are read with the full range. Saving is atomic: arrays are
 written first (temporary file, fsync, rename), then the JSON the same way, then arrays no
 longer referenced are removed, so a crash at any point leaves a readable project.
 
@@ -32,7 +34,7 @@ from gaitcore.silhouettes.annotations import Rect, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
 
 FORMAT = "gaitstudio-project"
-VERSION = 2
+VERSION = 3
 SUFFIX = ".gaitproj"
 _ARRAY_NAME = re.compile(r"^(crops|crops_packed|centers_xy|lost)-[0-9a-f]{16}\.npy$")
 
@@ -167,10 +169,11 @@ def _from_json(doc: dict, p: Path) -> Project:
         settings[name] = tuple(int(f) for f in settings.get(name, ()))
     known = AnalysisSettings.__dataclass_fields__
     sil = doc["silhouettes"]
+    trimmed = doc["version"] >= 3  # before, the range cut the footage itself and no editor set it
     return Project(
         footage=footage,
-        frame_start=int(doc["frame_start"]),
-        frame_stop=None if doc["frame_stop"] is None else int(doc["frame_stop"]),
+        frame_start=int(doc["frame_start"]) if trimmed else 0,
+        frame_stop=None if not trimmed or doc["frame_stop"] is None else int(doc["frame_stop"]),
         fps=None if doc["fps"] is None else float(doc["fps"]),
         subject_rects=tuple(Rect(*r) for r in doc["subject_rects"]),
         background_rects=tuple(Rect(*r) for r in doc["background_rects"]),

@@ -6,6 +6,7 @@ images) is segmented from rectangles drawn on its first frame (paper Section 2.2
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -50,33 +51,44 @@ def load_silhouettes(
     subject: Sequence[Rect] = (),
     background: Sequence[Rect] = (),
     max_side: int | None = WORK_SIDE_PX,
+    start: int = 0,
+    stop: int | None = None,
     progress: Progress | None = None,
 ) -> RoiClip:
-    """Tracked, fixed-size silhouettes of the subject in every frame of ``source``.
+    """Tracked, fixed-size silhouettes of the subject in frames ``start <= f < stop`` of ``source``.
 
     Parameters
     ----------
     source : Path
         Folder of binary masks, folder of colour images, or video file.
     out_dir : Path
-        For colour footage, the computed masks are written to ``out_dir/masks/00000.png``...
+        For colour footage, the computed masks are written to ``out_dir/masks/00000.png``...,
+        named by source frame.
     subject, background : sequence of Rect
-        Rectangles on the first frame, required for colour footage.
+        Rectangles on the first frame (of the range), required for colour footage.
     max_side : int or None
         Longer side of the ROI crops (they are shrunk to it), which bounds memory on long
         clips; None keeps the source resolution.
+    start, stop : int
+        Source frames to read (``stop=None``: to the end).
     progress : callable(done, total) -> bool, optional
 
     Raises
     ------
     GaitInputError
-        Unreadable input, colour footage without rectangles, or no subject found.
+        Unreadable input, colour footage without rectangles, a bad range, or no subject found.
     """
     source = Path(source)
     if not source.exists():
         raise GaitInputError(f"{source} does not exist: give a video file, an image folder or a mask folder")
     if is_mask_folder(source):
-        return crop_rois(iter_mask_folder(source), max_side=max_side, progress=progress)
+        n = len(list_image_files(source))
+        last = n if stop is None else stop
+        if not 0 <= start < last <= n:
+            raise GaitInputError(f"frames {start}:{stop} do not fit {source}, which has {n} masks: "
+                                 f"choose 0 <= start < stop <= {n}")
+        masks = itertools.islice(iter_mask_folder(source), start, last)
+        return crop_rois(masks, max_side=max_side, progress=progress)
     if not subject or not background:
         raise GaitInputError(
             f"{source} is colour footage: give at least one --subject and one --background "
@@ -89,8 +101,8 @@ def load_silhouettes(
     mask_dir.mkdir(parents=True, exist_ok=True)
 
     def write_mask(index: int, mask: np.ndarray) -> None:
-        cv2.imwrite(str(mask_dir / f"{index:05d}.png"), mask)
+        cv2.imwrite(str(mask_dir / f"{start + index:05d}.png"), mask)
 
-    with open_frames(source) as frames:
+    with open_frames(source, start=start, stop=stop) as frames:
         return segment_clip(frames, list(subject), list(background), progress=progress,
                             mask_sink=write_mask, max_side=max_side)

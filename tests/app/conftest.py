@@ -66,6 +66,7 @@ class ScriptedAsker(Asker):
         self.export_answer = "keep"  # or an AnimationOptions, or None to cancel
         self.confirm_answer = True
         self.chosen_frame: int | None = None
+        self.frame_rate_answer: float | None = None
         self.asked: list[str] = []
 
     def error(self, title: str, message: str) -> None:
@@ -105,6 +106,10 @@ class ScriptedAsker(Asker):
     def confirm(self, title: str, message: str) -> bool:
         self.asked.append(f"{title}: {message}")
         return self.confirm_answer
+
+    def frame_rate(self, current: float | None) -> float | None:
+        self.asked.append("frame rate")
+        return self.frame_rate_answer
 
     def choose_frame(self, title: str, frames: list[int]) -> int | None:
         self.asked.append(title)

@@ -58,8 +58,11 @@ def test_summary_ranks_usable_first_sorts_and_opens_a_clip_with_its_trim(
     wait_ready(qtbot, window)
     project = window.state.project
     assert (project.frame_start, project.frame_stop) == (10, 90)
-    assert project.silhouettes is not None and project.silhouettes.n_frames == 80
-    assert window.state.n_frames == 80
+    # The footage and its silhouettes are whole; the trim limits the analysis to 10..90.
+    assert project.silhouettes is not None and project.silhouettes.n_frames == 100
+    assert window.state.n_frames == 100
+    qtbot.waitUntil(lambda: window.state.analysis is not None, timeout=30_000)
+    assert window.state.analysis.frame_range == (10, 90)
     assert window.state.path == batch_dir / "good" / "clip.gaitproj"
 
 

@@ -252,7 +252,8 @@ def test_exporting_before_every_key_is_posed_says_which_are_missing(qtbot, windo
     assert f"missing: frames {missing}" in window.animation_view.status.text()
 
 
-def test_export_a_preview_video_off_the_gui_thread(qtbot, window, asker, canter_clip, tmp_path):
+def test_export_a_preview_video_off_the_gui_thread(qtbot, window, asker, canter_clip, tmp_path,
+                                                  artifacts_dir):
     open_demo(qtbot, window, canter_clip)
     truth = true_poses(window.state.skeleton)
     for k in window.state.analysis.key_frames:
@@ -271,7 +272,10 @@ def test_export_a_preview_video_off_the_gui_thread(qtbot, window, asker, canter_
 
     video = cv2.VideoCapture(str(written[0]))
     assert int(video.get(cv2.CAP_PROP_FRAME_COUNT)) == len(window.animator.animation.cycle)
+    ok, frame = video.read()
     video.release()
+    assert ok and frame.shape == (240, 320 + 320, 3)  # the footage at its size, the side view
+    cv2.imwrite(str(artifacts_dir / "app_preview_video_frame.png"), frame)
 
 
 def test_the_predicted_skeleton_follows_playback(qtbot, window, canter_clip):

@@ -113,7 +113,7 @@ def test_crops_are_packed_and_version_1_files_still_open(tmp_path):
     project = make_project(None)
     save_project(project, path)
     doc = json.loads(path.read_text())
-    assert doc["version"] == 2 and doc["silhouettes"]["crops_shape"] == [6, 9, 7]
+    assert doc["version"] == VERSION and doc["silhouettes"]["crops_shape"] == [6, 9, 7]
     packed = np.load(sidecar_dir(path) / doc["silhouettes"]["arrays"]["crops_packed"])
     assert packed.shape == (6, 9, 1) and packed.dtype == np.uint8
     # the same project as Gait Studio 1 wrote it: one byte per pixel
@@ -219,3 +219,14 @@ def test_a_bad_footage_fit_is_a_damaged_file(tmp_path, entry):
     (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
     with pytest.raises(GaitInputError, match="is damaged"):
         load_project(tmp_path / "p.gaitproj")
+
+
+def test_trim_and_frame_rate_survive_save_and_reopen_and_older_files_are_untrimmed(tmp_path):
+    path = tmp_path / "p.gaitproj"
+    save_project(Project(fps=29.97).with_trim(40, 136), path)
+    again = load_project(path)
+    assert again.trim == (40, 136) and again.fps == 29.97
+    doc = json.loads(path.read_text())
+    doc["version"] = 2  # written before the trim existed: its range cut the footage
+    path.write_text(json.dumps(doc))
+    assert load_project(path).trim == (0, None)

@@ -260,10 +260,40 @@ def test_preview_video_puts_footage_beside_the_skeleton(tmp_path):
     footage, poses = _preview_inputs(6)
     calls = []
     result = write_preview_video(tmp_path / "p.mp4", footage, HORSE, poses, 12.0,
-                                 size=(96, 72), progress=lambda d, t: calls.append((d, t)) or True)
+                                 progress=lambda d, t: calls.append((d, t)) or True)
     assert (result.path, result.codec, result.frames, result.note) == (tmp_path / "p.mp4", "mp4v", 6, None)
     assert calls[0] == (0, 6) and calls[-1] == (6, 6)
-    cap = cv2.VideoCapture(str(result.path))
+    frames = _read_video(result.path)
+    assert len(frames) == 6 and frames[0].shape == (90, 120 + 120, 3)  # footage at its size
+    assert frames[1][45, 60].mean() > 200 and frames[0][45, 60].mean() < 30  # the footage
+    panel = frames[0][:, 120:].astype(int)
+    assert (np.abs(panel - panel[2, 2]).sum(axis=2) > 60).sum() > 300  # a horse on the sky
+
+
+@pytest.mark.gl
+def test_preview_video_draws_the_skeleton_over_the_footage_where_it_was_fitted(tmp_path):
+    from gaitcore.project.document import FootageFit
+    from gaitcore.project.footage_fit import footage_maps
+
+    n, size = 3, (200, 150)
+    poses = np.zeros((n, HORSE.n_channels))
+    black = (np.zeros((size[1], size[0]), np.uint8) for _ in range(n))
+    maps = footage_maps(range(n), HORSE, None, size)
+    result = write_preview_video(tmp_path / "p.mp4", black, HORSE, poses, footage_from_world=maps)
+    view = _read_video(result.path)[0][:, : size[0]].astype(int)
+    drawn = np.argwhere(view.sum(axis=2) > 150)
+    assert len(drawn) > 200  # bones over the black footage
+    # centred as the automatic placement puts it: the skeleton's centre on the frame's
+    assert abs(drawn[:, 1].mean() - size[0] / 2) < 25 and abs(drawn[:, 0].mean() - size[1] / 2) < 25
+    flipped = footage_maps(range(n), HORSE, None, size, FootageFit(flip=True))
+    black = (np.zeros((size[1], size[0]), np.uint8) for _ in range(n))
+    result = write_preview_video(tmp_path / "q.mp4", black, HORSE, poses, footage_from_world=flipped)
+    mirror = _read_video(result.path)[0][:, : size[0]].astype(int)
+    assert np.abs(mirror[:, ::-1] - view).mean() < 0.5 * np.abs(mirror - view).mean()
+
+
+def _read_video(path):
+    cap = cv2.VideoCapture(str(path))
     frames = []
     while True:
         ok, frame = cap.read()
@@ -271,17 +301,14 @@ def test_preview_video_puts_footage_beside_the_skeleton(tmp_path):
             break
         frames.append(frame)
     cap.release()
-    assert len(frames) == 6 and frames[0].shape == (72, 192, 3)
-    assert frames[1][36, 48].mean() > 200 and frames[0][36, 48].mean() < 30  # the footage
-    panel = frames[0][:, 96:].astype(int)
-    assert (np.abs(panel - panel[2, 2]).sum(axis=2) > 60).sum() > 300  # a horse on the sky
+    return frames
 
 
 @pytest.mark.gl
 def test_preview_video_falls_back_to_mjpg(tmp_path, monkeypatch):
     monkeypatch.setattr(export, "VIDEO_CODECS", (("XXXX", None), ("MJPG", ".avi")))
     footage, poses = _preview_inputs(2)
-    result = write_preview_video(tmp_path / "p.mp4", footage, HORSE, poses, size=(64, 48))
+    result = write_preview_video(tmp_path / "p.mp4", footage, HORSE, poses)
     assert result.path == tmp_path / "p.avi" and result.codec == "MJPG"
     assert "XXXX is not available" in result.note and "p.avi" in result.note
     assert result.path.stat().st_size > 0 and not (tmp_path / "p.mp4").exists()
@@ -291,10 +318,9 @@ def test_preview_video_falls_back_to_mjpg(tmp_path, monkeypatch):
 def test_preview_video_cancel_and_short_footage_leave_no_file(tmp_path):
     footage, poses = _preview_inputs(5)
     with pytest.raises(Cancelled, match="cancelled at frame 2"):
-        write_preview_video(tmp_path / "p.mp4", footage, HORSE, poses, size=(64, 48),
+        write_preview_video(tmp_path / "p.mp4", footage, HORSE, poses,
                             progress=lambda d, t: d < 2)
     assert not (tmp_path / "p.mp4").exists()
     with pytest.raises(GaitInputError, match="footage has 3 frames but there are 5 poses"):
-        write_preview_video(tmp_path / "p.mp4", iter(list(_preview_inputs(0)[0])), HORSE, poses,
-                            size=(64, 48))
+        write_preview_video(tmp_path / "p.mp4", iter(list(_preview_inputs(0)[0])), HORSE, poses)
     assert not (tmp_path / "p.mp4").exists()
