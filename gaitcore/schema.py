@@ -227,7 +227,8 @@ class JsonValue:
         if not isinstance(self.value, list):
             raise self.fail("a list")
         if not min_len <= len(self.value) <= max_len:
-            raise self.fail(f"a list of {min_len} to {max_len} elements, not {len(self.value)}")
+            count = min_len if min_len == max_len else f"{min_len} to {max_len}"
+            raise self.fail(f"a list of {count} elements")
         return [self._child(v, i) for i, v in enumerate(self.value)]
 
     def entries(self, *, max_len: int) -> Iterator[tuple[str, JsonValue]]:

@@ -13,9 +13,14 @@ import numpy as np
 
 from gaitcore.analysis.analyze import Analysis
 from gaitcore.errors import GaitInputError
+from gaitcore.schema import JsonValue, read_json
 
 FORMAT = "gaitstudio-analysis"
 VERSION = 1
+MAX_VERSION = 1_000_000
+MAX_FRAMES = 10_000_000
+MAX_PCS = 64
+MAX_ANALYSIS_BYTES = 2 << 30
 
 
 def analysis_to_dict(analysis: Analysis, *, source: str = "") -> dict:
@@ -83,14 +88,9 @@ def read_analysis_json(path: str | Path) -> AnalysisRecord:
     GaitInputError
         Missing or malformed file, or inconsistent content.
     """
-    path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise GaitInputError(f"analysis file not found: {path}; run 'gaitcore analyze' first") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise GaitInputError(f"{path} is not a readable analysis file ({exc})") from None
-    return analysis_record_from_dict(data, where=str(path))
+    doc = read_json(path, what="analysis file", max_bytes=MAX_ANALYSIS_BYTES,
+                    advice="run 'gaitcore analyze' again to rewrite it")
+    return analysis_record_from_dict(doc)
 
 
 def analysis_record(analysis: Analysis) -> AnalysisRecord:
@@ -106,32 +106,38 @@ def analysis_record(analysis: Analysis) -> AnalysisRecord:
 def analysis_record_from_dict(data: object, *, where: str = "analysis") -> AnalysisRecord:
     """Check the parsed content of an ``analysis.json`` and turn it into a record.
 
+    Parameters
+    ----------
+    data : dict or JsonValue
+        The parsed document (a :class:`~gaitcore.schema.JsonValue` knows its file).
+    where : str
+        Names the document in messages when ``data`` is a plain dict.
+
     Raises
     ------
     GaitInputError
-        Not an analysis, a newer version, missing or malformed fields, inconsistent content.
+        Not an analysis, a newer version, missing or malformed fields (named with their
+        path), inconsistent content.
     """
-    path = where
-    if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise GaitInputError(f"{path} is not a Gait Studio analysis file")
-    if data.get("version", 0) > VERSION:
+    doc = data if isinstance(data, JsonValue) else JsonValue(data, where)
+    if not doc.has("format") or doc.value["format"] != FORMAT:
+        raise GaitInputError(f"{doc.what} is not a Gait Studio analysis file")
+    version = doc.key("version", 1).integer(lo=1, hi=MAX_VERSION)
+    if version > VERSION:
         raise GaitInputError(
-            f"{path} was written by a newer Gait Studio (format version {data['version']}); "
-            "update Gait Studio to read it"
-        )
-    try:
-        n = int(data["n_frames"])
-        proj = np.asarray(data["projections"], dtype=float)
-        filt = np.asarray(data.get("filtered_projections", data["projections"]), dtype=float)
-        theta = np.asarray(data["loop_angle"], dtype=float)
-        keys = tuple(int(f) for f in data["key_frames"])
-        alts = data.get("alternate_frames")
-        alts = None if alts is None else tuple(int(f) for f in alts)
-        alpha = float(data.get("alpha", np.log(2.0)))
-    except (KeyError, TypeError, ValueError) as exc:
-        raise GaitInputError(f"{path} is missing or has a malformed field: {exc}") from None
-    if proj.ndim != 2 or proj.shape[0] != n or filt.shape != proj.shape or theta.shape != (n,):
-        raise GaitInputError(f"{path}: projections do not match n_frames = {n}")
-    if not keys or any(not 0 <= f < n for f in keys + (alts or ())):
-        raise GaitInputError(f"{path}: key frames must lie in 0..{n - 1}")
+            f"{doc.what} was written by a newer Gait Studio (format version {version}); "
+            "update Gait Studio to read it")
+    n = doc.key("n_frames").integer(lo=1, hi=MAX_FRAMES)
+    rows = doc.key("projections").items(min_len=n, max_len=n)
+    pcs = len(rows[0].items(min_len=1, max_len=MAX_PCS))
+    proj = doc.key("projections").array(columns=pcs, min_rows=n, max_rows=n)
+    filt = doc.key("filtered_projections", doc.value["projections"]).array(
+        columns=pcs, min_rows=n, max_rows=n)
+    theta = doc.key("loop_angle").array(min_rows=n, max_rows=n)
+    keys = doc.key("key_frames").integers(max_len=MAX_PCS * MAX_PCS, lo=0, hi=n - 1)
+    alts = doc.key("alternate_frames", None)
+    alts = None if alts.is_null() else alts.integers(max_len=len(keys), lo=0, hi=n - 1)
+    alpha = doc.key("alpha", float(np.log(2.0))).number(lo=0, lo_open=True, hi=1e6)
+    if not keys:
+        raise doc.key("key_frames").fail(f"a list of key frames in 0..{n - 1}")
     return AnalysisRecord(n, proj, filt, theta, keys, alts, alpha)
