@@ -90,11 +90,13 @@ def read_bytes(path: str | os.PathLike, *, what: str, max_bytes: int) -> bytes:
                                  f"{max_bytes / MiB:.0f} MiB such a file can hold: is it the "
                                  "right file?")
         try:
-            data = fh.read(max_bytes + 1)
+            data = fh.read(size)
+            grew = fh.read(1)
         except OSError as exc:
             raise GaitInputError(f"cannot read {what} {path}: {exc.strerror or exc}") from None
-    if len(data) > max_bytes:  # grew while read
-        raise GaitInputError(f"{what} {path} is larger than {max_bytes / MiB:.0f} MiB")
+    if grew or len(data) != size:
+        raise GaitInputError(f"{what} {path} changed while it was read: try again once it is "
+                             "written")
     return data
 
 

@@ -28,6 +28,14 @@ from gaitcore.footage.image_folder import (
     read_image,
 )
 
+MAX_FPS = 10_000.0
+"""Highest frame rate accepted anywhere (footage, projects, BVH, exports): high-speed
+cameras stay below it, and 1 / MAX_FPS still prints as a plain BVH frame time."""
+
+# FFmpeg prints every decoding error of a damaged video on stderr (thousands of lines before
+# our one-line error); OpenCV reads this when its FFmpeg backend first opens a file.
+os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # AV_LOG_QUIET
+
 
 class _VideoReader:
     """Sequential decoder over one ``cv2.VideoCapture`` that seeks only when it must."""
@@ -279,11 +287,18 @@ def open_frames(
     ------
     GaitInputError
         Missing path; unreadable, truncated or undecodable file; zero frames; empty folder;
-        non-image files or images of different sizes in a folder; a bad frame range.
+        non-image files or images of different sizes in a folder; a bad frame range; a frame
+        rate that is not within (0, MAX_FPS]; a path that is neither a file nor a folder.
     """
     p = Path(path)
     if not p.exists():
         raise GaitInputError(f"{p} does not exist: give the path of a video file or image folder")
+    if not (p.is_dir() or p.is_file()):
+        raise GaitInputError(f"{p} is neither a video file nor a folder (a pipe or a device?): "
+                             "give the path of a video file or image folder")
+    if fps is not None and not (np.isfinite(fps) and 0 < fps <= MAX_FPS):
+        raise GaitInputError(f"frame rate {fps} is not a number of frames per second in "
+                             f"(0, {MAX_FPS:g}]")
     if p.is_dir():
         files = list_image_files(p)
         first = read_image(files[0], None)
@@ -367,7 +382,7 @@ def _open_video(p: Path, start: int, stop: int | None, fps: float | None,
             )
     finally:
         reader.close()
-    if fps is None and header_fps > 0 and np.isfinite(header_fps):
+    if fps is None and 0 < header_fps <= MAX_FPS:
         fps = header_fps
     return FrameSource(p, files=None, n_source=n_source, size=size, fps=fps,
                        start=s0, stop=s1, cache_frames=cache_frames)
