@@ -42,6 +42,9 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 
 MiB = 1 << 20
+MAX_FPS = 10_000.0
+"""Highest frame rate accepted anywhere (footage, projects, BVH, the command's --fps):
+high-speed cameras stay below it, and 1 / MAX_FPS still prints as a plain BVH frame time."""
 _MISSING = object()
 
 

@@ -27,10 +27,7 @@ from gaitcore.footage.image_folder import (
     list_image_files,
     read_image,
 )
-
-MAX_FPS = 10_000.0
-"""Highest frame rate accepted anywhere (footage, projects, BVH, exports): high-speed
-cameras stay below it, and 1 / MAX_FPS still prints as a plain BVH frame time."""
+from gaitcore.schema import MAX_FPS
 
 # FFmpeg prints every decoding error of a damaged video on stderr (thousands of lines before
 # our one-line error); OpenCV reads this when its FFmpeg backend first opens a file.

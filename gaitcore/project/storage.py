@@ -28,7 +28,7 @@ from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.errors import GaitInputError
 from gaitcore.project.document import ORIGINS, AnimationOptions, FootageFit, Project, Silhouettes
 from gaitcore.rig.skeleton import Skeleton
-from gaitcore.schema import JsonValue, read_json, read_npy
+from gaitcore.schema import MAX_FPS, JsonValue, read_json, read_npy
 from gaitcore.silhouettes.annotations import Rect, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
 
@@ -41,7 +41,6 @@ MAX_PROJECT_BYTES = 1 << 30
 MAX_ARRAY_BYTES = 16 << 30
 MAX_FRAME = 10**8
 """Largest frame number a project may name (a day of footage at 1,000 fps)."""
-MAX_FPS = 10_000.0
 MAX_PIXELS = 1 << 20
 MAX_RECTS = 1_000
 """Rectangles per kind: a few seed the colour models; thousands are a damaged file."""

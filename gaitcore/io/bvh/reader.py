@@ -14,12 +14,11 @@ from pathlib import Path
 import numpy as np
 
 from gaitcore.errors import GaitInputError
-from gaitcore.footage.sources import MAX_FPS
 from gaitcore.io.bvh.hierarchy import Node, parse_hierarchy
 from gaitcore.io.pose_table import PoseTable
 from gaitcore.rig.rotations import axis_matrix, continuous_zxy
 from gaitcore.rig.skeleton import Joint, Skeleton
-from gaitcore.schema import read_text
+from gaitcore.schema import MAX_FPS, read_text
 
 _OUR_ROTATION_ORDER = "zxy"
 _SIDE_WORDS = (("Left", "Right"), ("left", "right"), ("LEFT", "RIGHT"))
