@@ -49,6 +49,7 @@ MAX_STROKE_POINTS = 100_000
 MAX_KEYS = 64
 MAX_FRAME_LIST = 100_000
 MAX_CHANNELS = 6 * 100_000
+_TEMPORARY = re.compile(r"^\.(.+)\.[0-9]+\.tmp$")
 _ARRAY_NAME = re.compile(r"^(crops|crops_packed|centers_xy|lost)-[0-9a-f]{16}\.npy$")
 
 
@@ -79,6 +80,12 @@ def save_project(project: Project, path: str | os.PathLike) -> None:
     GaitInputError
         When ``path`` holds a project of a newer format version (it is never overwritten) or
         the folder cannot be written.
+
+    Notes
+    -----
+    Temporary files left by a save that was killed (``.<name>.<pid>.tmp`` of another
+    process) are removed first; two processes saving the same project at once are not
+    supported.
     """
     p = Path(path).absolute()
     if p.exists():
@@ -86,8 +93,9 @@ def save_project(project: Project, path: str | os.PathLike) -> None:
     side = sidecar_dir(p)
     try:
         side.mkdir(parents=True, exist_ok=True)
+        _remove_stale_temporaries(p, side)
         doc = _to_json(project, p.parent, side)
-        _write_atomic(p, (json.dumps(doc, indent=1) + "\n").encode("utf-8"))
+        write_atomic(p, (json.dumps(doc, indent=1) + "\n").encode("utf-8"))
         keep = set(doc["silhouettes"]["arrays"].values()) if doc["silhouettes"] else set()
         for f in side.iterdir():
             if _ARRAY_NAME.match(f.name) and f.name not in keep:
@@ -290,9 +298,10 @@ def _read_doc(p: Path) -> JsonValue:
 def _refuse_newer(p: Path) -> None:
     """Raise when ``p`` is a project of a newer version (anything else may be replaced)."""
     try:
-        version = json.loads(p.read_text(encoding="utf-8")).get("version")
-    except (OSError, UnicodeDecodeError, ValueError, AttributeError):
+        doc = read_json(p, what="project file", max_bytes=MAX_PROJECT_BYTES)
+    except GaitInputError:  # unreadable, or not a regular file: replaced like any other
         return
+    version = doc.value.get("version") if isinstance(doc.value, dict) else None
     if isinstance(version, int) and version > VERSION:
         raise GaitInputError(
             f"{p} holds a project of a newer Gait Studio (format version {version}): it is not "
@@ -307,7 +316,7 @@ def _write_array(side: Path, stem: str, arr: np.ndarray) -> str:
     data = buf.getvalue()
     name = f"{stem}-{hashlib.sha256(data).hexdigest()[:16]}.npy"
     if not (side / name).exists():
-        _write_atomic(side / name, data)
+        write_atomic(side / name, data)
     return name
 
 
@@ -346,8 +355,22 @@ def _read_array(side: Path, name: JsonValue, kind: str, ndim: int) -> np.ndarray
                              "project file (or restore it from a backup)") from None
 
 
-def _write_atomic(path: Path, data: bytes) -> None:
-    """Write ``data`` to a temporary file beside ``path``, fsync it, rename it over ``path``."""
+def _remove_stale_temporaries(p: Path, side: Path) -> None:
+    """Delete what killed saves of ``p`` left: temporary files of other processes."""
+    ours = f".{os.getpid()}.tmp"
+    for folder, names in ((p.parent, lambda n: n == p.name), (side, _ARRAY_NAME.match)):
+        for f in folder.glob(".*.tmp"):
+            m = _TEMPORARY.match(f.name)
+            if m and names(m.group(1)) and not f.name.endswith(ours) and f.is_file():
+                f.unlink(missing_ok=True)
+
+
+def write_atomic(path: Path, data: bytes) -> None:
+    """Write ``data`` to a temporary file beside ``path``, fsync it, rename it over ``path``.
+
+    The temporary file is ``.<name>.<pid>.tmp``; a crash leaves it behind, and the next
+    :func:`save_project` of the same project removes it.
+    """
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         with open(tmp, "wb") as fh:
