@@ -96,7 +96,7 @@ def _header(row: list[str], path: Path) -> list[str]:
     header = [h.strip() for h in row]
     if header[0] != "frame":
         raise GaitInputError(
-            f"pose file {path}: the first column must be 'frame', found {header[:1]}"
+            f"pose file {path}: the first column must be 'frame', found '{_shown(header[0])}'"
         )
     if len(header) < 2:
         raise GaitInputError(f"pose file {path} has no channel columns after 'frame'")
@@ -113,13 +113,19 @@ def _numbers(row: list[str], header: list[str], where: str) -> np.ndarray:
         values = np.array([float(cell) for cell in row])
     except ValueError:
         j, cell = next((j, c) for j, c in enumerate(row) if not _is_number(c))
-        shown = cell if len(cell) <= 40 else cell[:37] + "..."
-        raise GaitInputError(f"{where}, column '{header[j]}': '{shown}' is not a number") from None
+        raise GaitInputError(f"{where}, column '{_shown(header[j])}': '{_shown(cell)}' is not "
+                             "a number") from None
     if not np.all(np.isfinite(values)):
         j = int(np.argmin(np.isfinite(values)))
-        raise GaitInputError(f"{where}, column '{header[j]}': value is missing or NaN or "
+        raise GaitInputError(f"{where}, column '{_shown(header[j])}': value is missing or NaN or "
                              "infinite; every channel of every posed frame needs a number")
     return values
+
+
+def _shown(text: str) -> str:
+    """``text`` on one short line, for a message."""
+    text = " ".join(text.split())
+    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _is_number(text: str) -> bool:

@@ -333,6 +333,10 @@ def _read_silhouettes(sil: JsonValue, side: Path) -> Silhouettes:
         crops = _read_array(side, arrays.key("crops"), "b", 3)
     centers = _read_array(side, arrays.key("centers_xy"), "f", 2)
     lost = _read_array(side, arrays.key("lost"), "b", 1)
+    if centers.shape == (len(lost), 2) and not np.all(np.isfinite(centers[~lost])):
+        raise GaitInputError(f"{side / arrays.key('centers_xy').value} holds a centre that is not "
+                             "a finite number on a frame where the subject was found: the "
+                             "project is damaged")
     scale = sil.key("scale").number(lo=0, lo_open=True, hi=MAX_PIXELS)
     origin = sil.key("origin").text(choices=ORIGINS)
     return Silhouettes(RoiClip(crops=crops, centers_xy=centers, lost=lost, scale=scale), origin)
