@@ -29,7 +29,12 @@ from gaitcore.schema import MAX_FPS
 from gaitcore.silhouettes.annotations import Rect, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
 from tests.fuzzing import (
-    DEFAULT_CASES, FUZZ_CASES, SPECIAL_NUMBERS, check_reader, mutate_json, mutate_text,
+    DEFAULT_CASES,
+    FUZZ_CASES,
+    SPECIAL_NUMBERS,
+    check_reader,
+    mutate_json,
+    mutate_text,
 )
 
 HORSE = load_template("horse")
