@@ -377,8 +377,10 @@ def read_npy(path: str | os.PathLike, *, what: str, kind: str, ndim: int,
             read_header = (np.lib.format.read_array_header_1_0 if version == (1, 0)
                            else np.lib.format.read_array_header_2_0)
             shape, fortran, dtype = read_header(fh, max_header_size=10_000)
-        except (ValueError, OSError, EOFError, SyntaxError, TypeError) as exc:
-            raise GaitInputError(f"{what} {p} is damaged (not a NumPy array file: {exc}); "
+        except Exception as exc:  # noqa: BLE001 - numpy parses the header with ast and
+            # tokenize, which raise SyntaxError, TokenError, ValueError... on damaged bytes
+            why = " ".join(str(exc).split())[:120]
+            raise GaitInputError(f"{what} {p} is damaged (not a NumPy array file: {why}); "
                                  "restore it from a backup") from None
         if dtype.hasobject or dtype.kind not in kind or len(shape) != ndim:
             raise GaitInputError(f"{what} {p} holds a {len(shape)}-D {dtype} array, not the "
