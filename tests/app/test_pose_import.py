@@ -76,6 +76,12 @@ BAD_FILES = {
     "text.csv": ("frame,root.tx\n0,abc\n", "'abc' is not a number"),
     "broken.bvh": (CHAIN_BVH.replace("  }\n}\nMOTION", "MOTION"), "line"),
     "other_rig.bvh": (CHAIN_BVH, "on joints root, spine1, spine2"),
+    "frames_nan.bvh": (CHAIN_BVH.replace("Frames: 2", "Frames: nan"), "'Frames:' must be"),
+    "huge_cell.csv": ("frame,root.tx\n0," + "1" * 131_073 + "\n", "field larger than"),
+    "deep.bvh": ("HIERARCHY\nROOT j0\n{\nOFFSET 0 0 0\nCHANNELS 1 Zrotation\n"
+                 + "JOINT j\n{\nOFFSET 0 1 0\nCHANNELS 1 Zrotation\n" * 1500 + "}\n" * 1501
+                 + "MOTION\nFrames: 1\nFrame Time: 0.04\n" + "0 " * 1501 + "\n",
+                 "lacks 117 of the 117 channels"),
 }
 
 
