@@ -42,6 +42,7 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 
 MiB = 1 << 20
+_MAX_NPY_HEADER = 10_000
 MAX_FPS = 10_000.0
 """Highest frame rate accepted anywhere (footage, projects, BVH, the command's --fps):
 high-speed cameras stay below it, and 1 / MAX_FPS still prints as a plain BVH frame time."""
@@ -374,9 +375,14 @@ def read_npy(path: str | os.PathLike, *, what: str, kind: str, ndim: int,
         size = os.fstat(fh.fileno()).st_size
         try:
             version = np.lib.format.read_magic(fh)
+            width = 2 if version == (1, 0) else 4
+            length = int.from_bytes(fh.read(width), "little")  # numpy reads it all, unchecked
+            if length > min(_MAX_NPY_HEADER, size):
+                raise ValueError(f"a header of {length} bytes")
+            fh.seek(-width, os.SEEK_CUR)
             read_header = (np.lib.format.read_array_header_1_0 if version == (1, 0)
                            else np.lib.format.read_array_header_2_0)
-            shape, fortran, dtype = read_header(fh, max_header_size=10_000)
+            shape, fortran, dtype = read_header(fh, max_header_size=_MAX_NPY_HEADER)
         except Exception as exc:  # noqa: BLE001 - numpy parses the header with ast and
             # tokenize, which raise SyntaxError, TokenError, ValueError... on damaged bytes
             why = " ".join(str(exc).split())[:120]

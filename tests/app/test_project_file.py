@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import tracemalloc
 
 import numpy as np
 import pytest
@@ -218,7 +219,8 @@ def _npy_header(descr: str, shape: tuple) -> bytes:
     return b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode()
 
 
-@pytest.mark.parametrize("damage", ["empty", "truncated", "2 PiB", "object", "folder"])
+@pytest.mark.parametrize("damage", ["empty", "truncated", "2 PiB", "object", "folder",
+                                    "600 MB header"])
 def test_a_damaged_sidecar_array_is_one_clear_error(tmp_path, damage):
     path, doc = _saved(tmp_path)
     f = sidecar_dir(path) / doc["silhouettes"]["arrays"]["centers_xy"]
@@ -229,9 +231,16 @@ def test_a_damaged_sidecar_array_is_one_clear_error(tmp_path, damage):
     else:
         f.write_bytes({"empty": b"", "truncated": data[:-9],
                        "2 PiB": _npy_header("|u1", (2**51,)) + b"\0" * 64,
-                       "object": _npy_header("|O", (2,)) + b"\0" * 16}[damage])
-    with pytest.raises(GaitInputError, match=f.name) as info:
-        load_project(path)
+                       "object": _npy_header("|O", (2,)) + b"\0" * 16,
+                       "600 MB header": b"\x93NUMPY\x02\x00" + (600 << 20).to_bytes(4, "little")
+                       + b"{" * 64}[damage])
+    tracemalloc.start()
+    try:
+        with pytest.raises(GaitInputError, match=f.name) as info:
+            load_project(path)
+        assert tracemalloc.get_traced_memory()[1] < 20 << 20, "allocated what the header said"
+    finally:
+        tracemalloc.stop()
     assert "\n" not in str(info.value)
 
 
