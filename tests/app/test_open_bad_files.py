@@ -19,6 +19,7 @@ from app.main import main
 from gaitcore.project.document import Project, Silhouettes
 from gaitcore.project.storage import save_project, sidecar_dir
 from gaitcore.silhouettes.tracking import RoiClip
+from tests.app.conftest import wait_jobs
 
 GIVE_UP_MS = 60_000
 
@@ -92,11 +93,12 @@ def test_gaitstudio_on_a_bad_project_shows_a_dialog_and_exits_0(gaitstudio, tmp_
     assert {f: f.read_bytes() for f in before} == before, "the file was changed"
 
 
-def test_load_rig_from_a_bad_bvh_fails_into_a_dialog(window, asker, tmp_path):
+def test_load_rig_from_a_bad_bvh_fails_into_a_dialog(qtbot, window, asker, tmp_path):
     bvh = tmp_path / "rig.bvh"
     bvh.write_text("HIERARCHY\nROOT a\n{\nOFFSET 0 0 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n"
                    "}\nMOTION\nFrames: nan\nFrame Time: 0.04\n0 0 0\n")
     before = window.state.project
-    assert not window.posing.load_rig(bvh)
+    window.posing.load_rig(bvh)
+    wait_jobs(qtbot, window)
     assert len(asker.errors) == 1 and "rig.bvh" in asker.errors[0] and "Frames" in asker.errors[0]
     assert window.state.project is before
