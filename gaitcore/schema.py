@@ -33,7 +33,6 @@ import math
 import os
 import stat
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -158,7 +157,7 @@ def parse_json(text: str, *, what: str, advice: str = "") -> JsonValue:
         raise GaitInputError(f"{what} nests lists or objects too deeply{tail}") from None
     except ValueError:  # an integer of more than sys.get_int_max_str_digits() digits
         raise GaitInputError(f"{what} holds an integer of thousands of digits{tail}") from None
-    return JsonValue(value, what, "", advice)
+    return JsonValue(value, what, advice)
 
 
 def read_json(path: str | os.PathLike, *, what: str, max_bytes: int,
@@ -168,30 +167,45 @@ def read_json(path: str | os.PathLike, *, what: str, max_bytes: int,
     return parse_json(text, what=f"{what} {path}", advice=advice)
 
 
-@dataclass(frozen=True)
 class JsonValue:
     """A parsed JSON value that knows where it is, with checked accessors.
 
     Each accessor returns a plain Python value (or more :class:`JsonValue`) when the value
     has the expected type, size and range, and raises :class:`GaitInputError` naming the
-    document and the path (``settings.pinned[2]``) otherwise.
+    document and the path (``settings.pinned[2]``) otherwise. The path is only spelled out
+    when a message needs it, so walking a large document stays cheap.
 
-    Attributes
+    Parameters
     ----------
     value : object
         What ``json.loads`` gave.
     what : str
         The document, for messages.
-    path : str
-        Where ``value`` sits in the document ("" for the whole document).
     advice : str
         What to do, appended to messages.
     """
 
-    value: Any
-    what: str
-    path: str = ""
-    advice: str = ""
+    __slots__ = ("value", "what", "advice", "_parent", "_step")
+
+    def __init__(self, value: Any, what: str, advice: str = "", *,
+                 _parent: JsonValue | None = None, _step: str | int = "") -> None:
+        self.value = value
+        self.what = what
+        self.advice = advice
+        self._parent = _parent
+        self._step = _step
+
+    @property
+    def path(self) -> str:
+        """Where the value sits in the document: ``""``, ``"strokes[3].width_px"``..."""
+        steps, node = [], self
+        while node._parent is not None:
+            steps.append(node._step)
+            node = node._parent
+        out = ""
+        for step in reversed(steps):
+            out += f"[{step}]" if isinstance(step, int) else (f".{step}" if out else str(step))
+        return out
 
     def fail(self, expected: str) -> GaitInputError:
         """The error for a value that is not ``expected`` ("a number from 0 to 1")."""
@@ -206,9 +220,7 @@ class JsonValue:
         return GaitInputError(f"{self.what}: {self.path} is missing{tail}")
 
     def _child(self, value: Any, step: str | int) -> JsonValue:
-        sub = f"{self.path}[{step}]" if isinstance(step, int) else (
-            f"{self.path}.{step}" if self.path else str(step))
-        return JsonValue(value, self.what, sub, self.advice)
+        return JsonValue(value, self.what, self.advice, _parent=self, _step=step)
 
     # -- containers ------------------------------------------------------------------------
     def is_null(self) -> bool:
@@ -304,24 +316,47 @@ class JsonValue:
         items = self.items(max_len=n, min_len=length or 0)
         return tuple(item.integer(lo=lo, hi=hi) for item in items)
 
+    def floats(self, *, length: int) -> tuple[float, ...]:
+        """Exactly ``length`` finite numbers, as a tuple (for short fixed-size lists)."""
+        v = self.value
+        if (type(v) is list and len(v) == length
+                and all(type(x) is float or type(x) is int for x in v)):
+            try:
+                out = tuple(map(float, v))
+            except OverflowError:  # an integer too large for a float
+                out = ()
+            if len(out) == length and all(map(math.isfinite, out)):
+                return out
+        return tuple(item.number() for item in self.items(min_len=length, max_len=length))
+
     def array(self, *, columns: int | None = None, max_rows: int = 1 << 20,
               min_rows: int = 0) -> np.ndarray:
         """A list of finite numbers as shape (n,), or of rows of ``columns`` numbers as
         shape (n, columns), float64, with ``min_rows <= n <= max_rows``."""
-        rows = self.items(max_len=max_rows, min_len=min_rows)
-        flat = rows if columns is None else [c for r in rows for c in r.items(
-            min_len=columns, max_len=columns)]
-        values = [v.value for v in flat]
+        rows = self.value
+        if not (isinstance(rows, list) and min_rows <= len(rows) <= max_rows):
+            self.items(min_len=min_rows, max_len=max_rows)  # raises with the right words
+        flat = rows
+        if columns is not None:
+            if not all(type(r) is list and len(r) == columns for r in rows):
+                for r in self.items(min_len=min_rows, max_len=max_rows):
+                    r.items(min_len=columns, max_len=columns)
+            flat = [x for r in rows for x in r]
         arr = None
-        if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+        if all(type(x) is float or type(x) is int for x in flat):  # bool is neither
             try:
-                arr = np.array(values, dtype=np.float64)
+                arr = np.array(flat, dtype=np.float64)
             except OverflowError:  # an integer too large for a float
                 arr = None
         if arr is None or not np.all(np.isfinite(arr)):
-            for v in flat:  # raises at the first value that is not a finite number
-                v.number()
+            self._first_bad_number(columns)
         return arr if columns is None else arr.reshape(len(rows), columns)
+
+    def _first_bad_number(self, columns: int | None) -> None:
+        """Raise for the first element that is not a finite number."""
+        for row in self.items(max_len=len(self.value)):
+            for cell in ([row] if columns is None else row.items(max_len=columns)):
+                cell.number()
 
 
 def _range_words(kind: str, lo: float, hi: float, lo_open: bool) -> str:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 from importlib.resources import files
 from pathlib import Path
 from typing import Any
@@ -408,19 +409,19 @@ def _parse_joint(item: JsonValue) -> Joint:
     name = item.key("name").text(max_len=256)
     if not name or "." in name:
         raise item.key("name").fail("a non-empty name without dots")
-    offset = tuple(item.key("offset").array(min_rows=3, max_rows=3).tolist())
+    offset = item.key("offset").floats(length=3)
     channels = tuple(c.text(max_len=2) for c in item.key("channels", []).items(max_len=6))
     limits = {}
     raw_limits = item.key("limits", None)
     if not raw_limits.is_null():
         for ch, bounds in raw_limits.entries(max_len=6):
-            lo, hi = bounds.array(min_rows=2, max_rows=2).tolist()
+            lo, hi = bounds.floats(length=2)
             limits[ch] = (lo, hi)
     radii, color = None, (0.5, 0.5, 0.5)
     bone = item.key("bone", None)
     if not bone.is_null():
-        radii = tuple(bone.key("radii").array(min_rows=2, max_rows=2).tolist())
-        color = tuple(bone.key("color", [0.5, 0.5, 0.5]).array(min_rows=3, max_rows=3).tolist())
+        radii = bone.key("radii").floats(length=2)
+        color = bone.key("color", [0.5, 0.5, 0.5]).floats(length=3)
         if min(radii) <= 0:
             raise bone.key("radii").fail("two positive numbers")
     return Joint(name, item.key("parent", None).text(max_len=256, optional=True), offset,
@@ -484,16 +485,22 @@ def _refuse_cycles(joints: tuple[Joint, ...], index: dict[str, int]) -> None:
 
 
 def _validate_channels(j: Joint) -> None:
-    chans = j.channels
-    if any(c not in CHANNEL_ORDER for c in chans) or len(set(chans)) != len(chans):
-        raise GaitInputError(f"joint {j.name!r}: channels {list(chans)} must be distinct names "
-                             f"from {list(CHANNEL_ORDER)}")
-    if list(chans) != sorted(chans, key=CHANNEL_ORDER.index):
-        raise GaitInputError(f"joint {j.name!r}: channels must follow the order "
-                             f"{list(CHANNEL_ORDER)} (rotation order Z, X, Y)")
-    if j.parent is not None and any(c.startswith("t") for c in chans):
-        raise GaitInputError(f"joint {j.name!r}: only the root may have translation channels")
+    problem = _channel_problem(j.channels, j.parent is None)
+    if problem:
+        raise GaitInputError(f"joint {j.name!r}: {problem}")
     for ch, (lo, hi) in j.limits.items():
-        if ch not in chans or ch not in ROTATION_CHANNELS or not lo <= hi:
+        if ch not in j.channels or ch not in ROTATION_CHANNELS or not lo <= hi:
             raise GaitInputError(f"joint {j.name!r}: limits for {ch!r} must name one of its "
                                  f"rotation channels with lower <= upper")
+
+
+@lru_cache(maxsize=256)
+def _channel_problem(chans: tuple[str, ...], root: bool) -> str:
+    """What is wrong with a joint's channel list ("" when nothing); rigs repeat a few lists."""
+    if any(c not in CHANNEL_ORDER for c in chans) or len(set(chans)) != len(chans):
+        return f"channels {list(chans)} must be distinct names from {list(CHANNEL_ORDER)}"
+    if list(chans) != sorted(chans, key=CHANNEL_ORDER.index):
+        return f"channels must follow the order {list(CHANNEL_ORDER)} (rotation order Z, X, Y)"
+    if not root and any(c.startswith("t") for c in chans):
+        return "only the root may have translation channels"
+    return ""

@@ -55,11 +55,13 @@ class _Tokens:
             if self.motion_line is not None or self._row + 1 >= len(self._lines):
                 return False
             self._row += 1
-            self._toks, self._i = _TOKEN.findall(self._lines[self._row]), 0
-            upper = [t.upper() for t in self._toks]
-            if "MOTION" in upper:
-                self.motion_line = self._row
-                self._toks = self._toks[:upper.index("MOTION")]
+            line = self._lines[self._row]
+            self._toks, self._i = _TOKEN.findall(line), 0
+            if "MOTION" in line.upper():  # then look for it as a token
+                upper = [t.upper() for t in self._toks]
+                if "MOTION" in upper:
+                    self.motion_line = self._row
+                    self._toks = self._toks[:upper.index("MOTION")]
         return True
 
     def peek(self) -> tuple[str, int]:

@@ -184,21 +184,29 @@ def _build_skeleton(nodes: list[Node], motion: np.ndarray, scale: float, bone_ra
         if parent is not None and length > 1e-9 and bone_ratio > 0:
             radii = (bone_ratio * length, bone_ratio * length)
         side, mirror = sides.get(name, ("C", None))
-        joints.append(Joint(name, parent, tuple(float(v) for v in offset), channels,
+        joints.append(Joint(name, parent, tuple(offset.tolist()), channels,
                             side=side, mirror=mirror, bone_radii=radii, bone_color=(0.6, 0.6, 0.6)))
     columns = [col for _, _, cols in converted for col in cols]
-    values = np.column_stack(columns) if columns else np.zeros((len(motion), 0))
+    values = np.empty((len(motion), len(columns)))
+    direct = [(k, col) for k, col in enumerate(columns) if isinstance(col, int)]
+    if direct:  # channels kept as they are: one gather instead of a column each
+        targets, sources = zip(*direct)
+        values[:, list(targets)] = motion[:, list(sources)]
+    for k, col in enumerate(columns):
+        if not isinstance(col, int):
+            values[:, k] = col
     return Skeleton(name=path.stem, joints=tuple(joints)), values
 
 
 def _joint_motion(node: Node, name: str, motion: np.ndarray, scale: float,
-                  path: Path) -> tuple[np.ndarray, tuple[str, ...], list[np.ndarray]]:
-    """Offset (metres), our channels and their curves for one BVH joint."""
+                  path: Path) -> tuple[np.ndarray, tuple[str, ...], list[np.ndarray | int]]:
+    """Offset (metres), our channels and their curves for one BVH joint (a curve is a
+    column of ``motion`` when the channel is kept as it is)."""
     offset = node.offset * scale
     trans = [(a, col) for k, a, col in node.channels if k == "t"]
     rot = [(a, col) for k, a, col in node.channels if k == "r"]
     channels: list[str] = []
-    columns: list[np.ndarray] = []
+    columns: list[np.ndarray | int] = []
     if trans and node.parent < 0:
         for a, col in sorted(trans, key=lambda ac: "xyz".index(ac[0])):
             channels.append("t" + a)
@@ -217,7 +225,7 @@ def _joint_motion(node: Node, name: str, motion: np.ndarray, scale: float,
     axes = "".join(a for a, _ in rot)
     if rot and _is_subsequence(axes, _OUR_ROTATION_ORDER):
         channels += ["r" + a for a in axes]
-        columns += [motion[:, col] for _, col in rot]
+        columns += [col for _, col in rot]
     elif rot:
         matrices = np.broadcast_to(np.eye(3), (len(motion), 3, 3))
         for a, col in rot:
