@@ -30,8 +30,11 @@ from gaitcore.footage.image_folder import (
 from gaitcore.schema import MAX_FPS
 
 # FFmpeg prints every decoding error of a damaged video on stderr (thousands of lines before
-# our one-line error); OpenCV reads this when its FFmpeg backend first opens a file.
-os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # AV_LOG_QUIET
+# our one-line error), and OpenCV its own "[ERROR:0@...]" lines: every failure becomes a
+# GaitInputError here, so both are silenced unless the user asked for their logs.
+os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # AV_LOG_QUIET, read at first open
+if "OPENCV_LOG_LEVEL" not in os.environ:
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
 
 
 class _VideoReader:

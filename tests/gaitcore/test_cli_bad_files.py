@@ -9,10 +9,17 @@ frame count or deep nesting, a CSV cell over the csv module's limit, and BVH ske
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from gaitcore.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
 
 ANALYSIS = {"format": "gaitstudio-analysis", "version": 1, "n_frames": 6, "alpha": 0.69,
             "key_frames": [1, 4], "projections": [[0.1 * i, 0.01 * i * i - 0.2 * i] for i in range(6)],
@@ -102,3 +109,19 @@ def test_an_unexpected_error_is_still_one_line(monkeypatch, capsys):
     assert main(["evaluate", "--gait", "walk"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "ZeroDivisionError (a bug over two lines)" in err
+
+
+def test_a_damaged_video_prints_one_line_not_the_decoder_log(shared_data, tmp_path):
+    video = shared_data / "muybridge-race-horse" / "race_horse_loop.mp4"
+    data = np.frombuffer(video.read_bytes(), np.uint8).copy()
+    rng = np.random.default_rng(1)
+    spots = rng.integers(len(data) // 10, len(data), 3000)
+    data[spots] = rng.integers(0, 256, len(spots), dtype=np.uint8)  # as a bad disk or download
+    (tmp_path / "damaged.mp4").write_bytes(data.tobytes())
+    run = subprocess.run([sys.executable, "-m", "gaitcore.cli", "analyze", str(tmp_path / "damaged.mp4"),
+                          "--out", str(tmp_path / "out"), "--subject", "10,10,50,50",
+                          "--background", "0,0,5,5"],
+                         cwd=ROOT, capture_output=True, text=True, timeout=300,
+                         env={k: v for k, v in os.environ.items() if not k.startswith("OPENCV_")})
+    assert run.returncode == 2
+    assert len(run.stderr.splitlines()) == 1, run.stderr[:500]
