@@ -432,8 +432,8 @@ def read_npy(path: str | os.PathLike, *, what: str, kind: str, ndim: int,
             raise GaitInputError(f"{what} {p} is damaged: its header declares shape {shape} "
                                  f"({nbytes} bytes) but it holds {size - fh.tell()}; restore "
                                  "it from a backup")
-        data = fh.read(nbytes)
-    if len(data) != nbytes:
+        flat = np.empty(count, dtype=dtype)
+        got = fh.readinto(memoryview(flat.view(np.uint8)))  # no second copy of the data
+    if got != nbytes:
         raise GaitInputError(f"{what} {p} is truncated; restore it from a backup")
-    arr = np.frombuffer(data, dtype=dtype, count=count)
-    return arr.reshape(shape, order="F" if fortran else "C").copy()
+    return flat.reshape(shape, order="F" if fortran else "C")
