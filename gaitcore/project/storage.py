@@ -44,7 +44,9 @@ MAX_FRAME = 10**8
 MAX_PIXELS = 1 << 20
 MAX_RECTS = 1_000
 """Rectangles per kind: a few seed the colour models; thousands are a damaged file."""
-MAX_STROKES = 200_000
+MAX_STROKES = 20_000
+"""Strokes in a project: a thousand sketched frames of twenty strokes. 200,000 took the
+window 20 s to open; a file with more is refused with this limit named."""
 MAX_STROKE_POINTS = 100_000
 MAX_KEYS = 64
 MAX_FRAME_LIST = 100_000

@@ -14,6 +14,7 @@ from gaitcore.errors import GaitInputError
 from gaitcore.project.document import AnimationOptions, FootageFit, Project, Silhouettes
 from gaitcore.project.storage import (
     MAX_RECTS,
+    MAX_STROKES,
     VERSION,
     load_project,
     missing_footage,
@@ -307,3 +308,11 @@ def test_temporary_files_of_a_killed_save_are_removed_by_the_next_save(tmp_path)
         f.write_bytes(b"half written")
     save_project(make_project(None), path)
     assert not any(f.exists() for f in stale) and other.exists()
+
+
+def test_too_many_strokes_are_refused_with_the_limit(tmp_path):
+    path, doc = _saved(tmp_path)
+    doc["strokes"] = [{"frame": 0, "width_px": 2.0, "points_xy": [[1, 2]]}] * (MAX_STROKES + 1)
+    path.write_text(json.dumps(doc))
+    with pytest.raises(GaitInputError, match=f"strokes must be a list of 0 to {MAX_STROKES}"):
+        load_project(path)
