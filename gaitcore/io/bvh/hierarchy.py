@@ -48,10 +48,11 @@ class _Tokens:
         self._row = -1  # index of the line being read
         self._toks: list[str] = []
         self._i = 0
+        self._n = 0  # len(self._toks)
 
     def _advance(self) -> bool:
         """Move to the next line with tokens; False at MOTION or the end of the file."""
-        while self._i >= len(self._toks):
+        while self._i >= self._n:
             if self.motion_line is not None or self._row + 1 >= len(self._lines):
                 return False
             self._row += 1
@@ -62,11 +63,12 @@ class _Tokens:
                 if "MOTION" in upper:
                     self.motion_line = self._row
                     self._toks = self._toks[:upper.index("MOTION")]
+            self._n = len(self._toks)
         return True
 
     def peek(self) -> tuple[str, int]:
         """The next token, or ``("", line)`` past the end (the MOTION or last line)."""
-        if self._i >= len(self._toks) and not self._advance():
+        if self._i >= self._n and not self._advance():
             return "", (self._row + 1 if self.motion_line is not None else len(self._lines))
         return self._toks[self._i], self._row + 1
 
@@ -74,6 +76,10 @@ class _Tokens:
         tok = self.peek()
         self._i += 1
         return tok
+
+    def skip(self) -> None:
+        """Pass the token :meth:`peek` just returned."""
+        self._i += 1
 
     def take_on_line(self, n: int) -> list[str]:
         """Up to ``n`` tokens left on the current line, stopping before a brace."""
@@ -167,23 +173,23 @@ class _Parser:
             raise self.fail(ln, f"{joint.kind} (line {joint.line}) has no CHANNELS; add e.g. "
                                 "'CHANNELS 3 Zrotation Xrotation Yrotation'")
         if word == "OFFSET":
-            self.toks.take()
+            self.toks.skip()
             self.nodes[joint.index].offset = np.array(self.numbers(3, "OFFSET", ln))
             joint.seen_offset = True
         elif word == "CHANNELS" and not joint.end_site:
-            self.toks.take()
+            self.toks.skip()
             self.channels(joint, ln)
         elif word == "JOINT" and not joint.end_site:
-            self.toks.take()
+            self.toks.skip()
             stack.append(self.open_joint(joint.index, ln, False))
         elif word == "END" and not joint.end_site:
-            self.toks.take()
+            self.toks.skip()
             if self.toks.peek()[0].upper() != "SITE":
                 raise self.fail(ln, "expected 'End Site'")
-            self.toks.take()
+            self.toks.skip()
             stack.append(self.open_joint(joint.index, ln, True))
         elif tok == "}":
-            self.toks.take()
+            self.toks.skip()
             stack.pop()
         elif tok == "":
             raise self.fail(ln, f"unbalanced braces: {joint.kind} opened at line {joint.line} "
