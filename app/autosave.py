@@ -4,6 +4,8 @@ While the project has unsaved changes, it is saved every ``interval_ms`` to
 ``<recovery dir>/<session>.gaitproj`` (plus ``<session>.json`` naming the real project file).
 A lock file marks the session as alive; at start-up, copies whose lock is stale (their
 process is gone) are offered for recovery. A clean save or a normal exit deletes the copy.
+Both files are written atomically; an autosaved project is never deleted because its info
+file is damaged.
 """
 
 from __future__ import annotations
@@ -20,9 +22,12 @@ from PySide6.QtCore import QLockFile, QObject, QTimer
 from app.state import AppState
 from gaitcore.errors import GaitInputError
 from gaitcore.project.document import Project
-from gaitcore.project.storage import SUFFIX, load_project, save_project, sidecar_dir
+from gaitcore.project.storage import SUFFIX, load_project, save_project, sidecar_dir, write_atomic
+from gaitcore.schema import read_json
 
 DEFAULT_INTERVAL_MS = 60_000
+MAX_INFO_BYTES = 1 << 20
+MAX_TIME_S = 1e11
 
 
 @dataclass(frozen=True)
@@ -57,7 +62,12 @@ class RecoveryCopy:
 
 
 def find_recovery_copies(directory: Path) -> list[RecoveryCopy]:
-    """Copies in ``directory`` whose session is gone, newest first."""
+    """Copies in ``directory`` whose session is gone, newest first.
+
+    A copy whose info file is empty or damaged (a crash while it was written by an older
+    version) is still offered, as an unsaved project from the time of the copy: only an
+    info file without its project is deleted.
+    """
     if not directory.is_dir():
         return []
     found = []
@@ -66,13 +76,26 @@ def find_recovery_copies(directory: Path) -> list[RecoveryCopy]:
         if not lock.tryLock(0):
             continue  # another running Gait Studio owns it
         lock.unlock()
-        try:
-            info = json.loads(meta.read_text(encoding="utf-8"))
-            original = Path(info["original"]) if info.get("original") else None
-            found.append(RecoveryCopy(meta.with_suffix(SUFFIX), original, float(info["saved_at"])))
-        except (OSError, ValueError, KeyError, TypeError):
-            _remove(meta.with_suffix(SUFFIX))
+        project_file = meta.with_suffix(SUFFIX)
+        if not project_file.is_file():
+            meta.unlink(missing_ok=True)
+            continue
+        original, saved_at = _read_info(meta)
+        found.append(RecoveryCopy(project_file, original,
+                                  saved_at if saved_at is not None else project_file.stat().st_mtime))
     return sorted(found, key=lambda c: -c.saved_at)
+
+
+def _read_info(meta: Path) -> tuple[Path | None, float | None]:
+    """The original project file and the time of a copy; (None, None) when the info file
+    cannot be read."""
+    try:
+        info = read_json(meta, what="autosave info", max_bytes=MAX_INFO_BYTES)
+        original = info.key("original", None).text(optional=True)
+        saved_at = info.key("saved_at").number(lo=0, hi=MAX_TIME_S)
+    except GaitInputError:
+        return None, None
+    return (Path(original) if original else None), saved_at
 
 
 class Autosaver(QObject):
@@ -115,7 +138,7 @@ class Autosaver(QObject):
                 self._lock.tryLock(0)
             save_project(state.project, self.project_file)
             meta = {"original": str(state.path) if state.path else None, "saved_at": time.time()}
-            self.project_file.with_suffix(".json").write_text(json.dumps(meta), encoding="utf-8")
+            write_atomic(self.project_file.with_suffix(".json"), json.dumps(meta).encode("utf-8"))
         except (GaitInputError, OSError) as exc:
             self.last_error = str(exc)
             return False

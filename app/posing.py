@@ -4,7 +4,8 @@ The frames to pose are the analysis's key-images and, with "alternates (walk)" o
 alternates the artist accepted (paper Section 3.2), one per key. :class:`PosingController`
 turns the artist's actions (a spin box, a drag, copy/paste, mirror, reset, imports, a new rig)
 into commands of :mod:`app.pose_commands`; questions go to the :class:`~app.dialogs.Asker`.
-An import that fails changes nothing and says why.
+Files are read as jobs, off the window's thread; an import that fails changes nothing and
+says why.
 """
 
 from __future__ import annotations
@@ -15,10 +16,12 @@ from pathlib import Path
 
 import numpy as np
 from PySide6.QtCore import QObject, Signal
+from PySide6.QtWidgets import QWidget
 
 from app.dialogs import Asker
 from app.pose_commands import SetPoseCommand, SetSkeletonCommand
 from app.state import AppState
+from app.workers import Job, JobRunner, ProgressDialog
 from gaitcore.errors import GaitInputError
 from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.pose_table import PoseTable, joints_of, map_channels, read_pose_table
@@ -38,10 +41,12 @@ class PosingController(QObject):
 
     messageRaised = Signal(str)
 
-    def __init__(self, state: AppState, asker: Asker, parent: QObject | None = None) -> None:
+    def __init__(self, state: AppState, asker: Asker, runner: JobRunner,
+                 parent: QObject | None = None) -> None:
         super().__init__(parent)
         self._state = state
         self.asker = asker
+        self._runner = runner
         self._clipboard: np.ndarray | None = None
         self._drags = count()
         self._drag_id = 0
@@ -164,66 +169,96 @@ class PosingController(QObject):
 
     # -- imports and rigs --------------------------------------------------------------------
     def import_csv(self, path: Path | None = None) -> bool:
-        """Pose the current key from a row of a pose CSV (channels matched by name)."""
+        """Pose the current key from a row of a pose CSV (channels matched by name).
 
-        def pick(path: Path) -> tuple[PoseTable, int | None]:
-            table = read_pose_table(path)
-            frames = [int(f) for f in table.frames]
-            if not frames:
-                raise GaitInputError("it has no rows")
-            row = frames.index(self._state.frame) if self._state.frame in frames else (
-                0 if len(frames) == 1 else self._choose_row(frames))
-            return table, row
-
-        return self._import_pose(path, "Import a pose from CSV", "Pose tables (*.csv)", pick)
+        The file is read off the window's thread; returns True when the reading started.
+        """
+        return self._import_pose(path, "Import a pose from CSV", "Pose tables (*.csv)",
+                                 read_pose_table, self._csv_row)
 
     def import_bvh(self, path: Path | None = None) -> bool:
-        """Pose the current key from one frame of a BVH file (joints matched by name)."""
+        """Pose the current key from one frame of a BVH file (joints matched by name).
 
-        def pick(path: Path) -> tuple[PoseTable, int | None]:
-            _, table, _ = read_bvh(path)
-            n = len(table.frames)
-            if n == 0:
-                raise GaitInputError("it has no motion frames")
-            row = 0 if n == 1 else self.asker.choose_frame(f"Frame of {path.name}", list(range(n)))
-            return table, row
+        The file is read off the window's thread; returns True when the reading started.
+        """
+        return self._import_pose(path, "Import a pose from a BVH frame", "BVH motion (*.bvh)",
+                                 lambda p: read_bvh(p)[1], self._bvh_row)
 
-        return self._import_pose(path, "Import a pose from a BVH frame", "BVH motion (*.bvh)", pick)
+    def _csv_row(self, table: PoseTable, path: Path) -> int | None:
+        frames = [int(f) for f in table.frames]
+        if not frames:
+            raise GaitInputError("it has no rows")
+        if self._state.frame in frames:
+            return frames.index(self._state.frame)
+        return 0 if len(frames) == 1 else self._choose_row(frames)
+
+    def _bvh_row(self, table: PoseTable, path: Path) -> int | None:
+        n = len(table.frames)
+        if n == 0:
+            raise GaitInputError("it has no motion frames")
+        return 0 if n == 1 else self.asker.choose_frame(f"Frame of {path.name}", list(range(n)))
 
     def _import_pose(self, path: Path | None, title: str, filter_: str,
-                     pick: Callable[[Path], tuple[PoseTable, int | None]]) -> bool:
-        """Ask for a file, let ``pick`` read it and choose a row, and pose the current key
-        with it; any GaitInputError becomes a message and changes nothing."""
-        if self._require_frame() is None:
+                     read: Callable[[Path], PoseTable],
+                     choose: Callable[[PoseTable, Path], int | None]) -> bool:
+        """Ask for a file, ``read`` it in a job, then let ``choose`` pick a row and pose the
+        current key with it; any GaitInputError becomes a message and changes nothing."""
+        frame = self._require_frame()
+        if frame is None:
             return False
         path = path or self.asker.open_file(title, filter_)
         if path is None:
             return False
         path = Path(path)
-        try:
-            table, row = pick(path)
-            if row is None:
-                return False
-            pose, ignored = map_channels(table.columns, table.values[row], self._state.skeleton)
-        except GaitInputError as exc:
-            self.asker.error("Cannot import the pose", f"{path.name}: {exc}")
-            return False
-        return self._apply_import(pose, ignored, f"import pose from {path.name} (frame {int(table.frames[row])})")
+
+        def apply(table: PoseTable) -> None:
+            if self.editable_frame() != frame:
+                self.messageRaised.emit(f"{path.name}: not imported, frame {frame} is no longer shown")
+                return
+            try:
+                row = choose(table, path)
+                if row is None:
+                    return
+                pose, ignored = map_channels(table.columns, table.values[row], self._state.skeleton)
+            except GaitInputError as exc:
+                self.asker.error("Cannot import the pose", f"{path.name}: {exc}")
+                return
+            self._apply_import(pose, ignored,
+                               f"import pose from {path.name} (frame {int(table.frames[row])})")
+
+        self._read(path, read, apply, "Cannot import the pose", f"{path.name}: ")
+        return True
 
     def load_rig(self, path: Path | None = None) -> bool:
         """Replace the skeleton by the rig of a BVH file; poses are dropped unless the channels
-        are the same (the artist is asked first)."""
+        are the same (the artist is asked first).
+
+        The file is read off the window's thread; returns True when the reading started.
+        """
         path = path or self.asker.open_file("Load rig from BVH", "BVH motion (*.bvh)")
         if path is None:
             return False
-        try:
-            skeleton, note = read_rig(path)
-        except GaitInputError as exc:
-            self.asker.error("Cannot load the rig", str(exc))
-            return False
-        if note:
-            self.messageRaised.emit(note)
-        return self._replace_skeleton(skeleton, f"load rig {skeleton.name}")
+        path = Path(path)
+
+        def apply(read: tuple[Skeleton, str]) -> None:
+            skeleton, note = read
+            if note:
+                self.messageRaised.emit(note)
+            self._replace_skeleton(skeleton, f"load rig {skeleton.name}")
+
+        self._read(path, read_rig, apply, "Cannot load the rig", "")
+        return True
+
+    def _read(self, path: Path, read: Callable[[Path], object], then: Callable[[object], None],
+              error_title: str, prefix: str) -> None:
+        """``read(path)`` as a job with a progress dialog; ``then`` gets what it returned,
+        a failure becomes an error dialog (``prefix`` + the message)."""
+        job = Job(lambda progress: read(path), f"Reading {path.name}", unit=None)
+        job.succeeded.connect(then)
+        job.failed.connect(lambda message: self.asker.error(error_title, prefix + message))
+        window = self.parent()
+        ProgressDialog(job, window if isinstance(window, QWidget) else None)
+        self._runner.start(job)
 
     def use_template(self) -> bool:
         """Go back to the bundled horse template."""

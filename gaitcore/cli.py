@@ -1,13 +1,16 @@
 """The ``gaitcore`` command: the whole method without a GUI.
 
 Exit status: 0 on success, 2 on bad input (one line on stderr, never a traceback), 130 when
-interrupted.
+interrupted. An unexpected error (a bug) also ends in one line and status 2; set
+``GAITCORE_TRACEBACK=1`` to see its traceback.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
+import re
 import sys
 from pathlib import Path
 
@@ -15,22 +18,38 @@ from gaitcore.bench import synth_command
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Cancelled
 from gaitcore.project import batch_command
+from gaitcore.schema import MAX_FPS
 
 
 class _Parser(argparse.ArgumentParser):
-    """An argument parser whose errors are one line, like every other gaitcore error."""
+    """An argument parser whose errors are one line, like every other gaitcore error.
+
+    Values that start with a minus and a digit (``--subject -10,-10,50,50``) are values, not
+    options (argparse before Python 3.13 took only plain negative numbers for values).
+    """
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
 
     def error(self, message: str) -> None:  # noqa: D102 - argparse API
         raise GaitInputError(f"{self.prog}: {message} (see '{self.prog} --help')")
+
+
+MAX_PIXELS = 1 << 20
 
 
 def _rect(text: str):
     from gaitcore.silhouettes.annotations import Rect
 
     try:
-        x, y, w, h = (int(round(float(v))) for v in text.split(","))
+        values = [float(v) for v in text.split(",")]
+        if len(values) != 4 or not all(abs(v) <= MAX_PIXELS for v in values):
+            raise ValueError
     except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a rectangle x,y,w,h in pixels") from None
+        raise argparse.ArgumentTypeError(f"'{text}' is not a rectangle x,y,w,h in pixels "
+                                         f"(four numbers within +-{MAX_PIXELS})") from None
+    x, y, w, h = (int(round(v)) for v in values)
     try:
         return Rect(x, y, w, h)
     except GaitInputError as exc:
@@ -67,8 +86,9 @@ def _clip_fps(args: argparse.Namespace) -> float | None:
     from gaitcore.footage.sources import video_fps
 
     if args.fps is not None:
-        if not (args.fps > 0 and args.fps < float("inf")):
-            raise GaitInputError(f"--fps must be a positive number of frames per second, got {args.fps}")
+        if not (0 < args.fps <= MAX_FPS):
+            raise GaitInputError(f"--fps must be a number of frames per second in "
+                                 f"(0, {MAX_FPS:g}], got {args.fps}")
         return float(args.fps)
     return video_fps(args.input) if args.input.is_file() else None
 
@@ -208,8 +228,9 @@ def _run_animate(args: argparse.Namespace) -> int:
     if exports and args.skeleton is None:
         raise GaitInputError(f"--{exports[0][0]} needs --skeleton SKEL.json (or a .bvh file) "
                              "to know the joint hierarchy")
-    if args.fps is not None and not (np.isfinite(args.fps) and args.fps > 0):
-        raise GaitInputError(f"--fps must be a positive number of frames per second, got {args.fps}")
+    if args.fps is not None and not (np.isfinite(args.fps) and 0 < args.fps <= MAX_FPS):
+        raise GaitInputError(f"--fps must be a number of frames per second in (0, {MAX_FPS:g}], "
+                             f"got {args.fps}")
     skeleton = None
     if args.skeleton is not None:
         from gaitcore.project.steps import read_rig
@@ -361,6 +382,14 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except OSError as exc:
         print(f"gaitcore: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr)
+        return 2
+    except Exception as exc:  # noqa: BLE001 - a bug must still end in one line, not a traceback
+        if os.environ.get("GAITCORE_TRACEBACK"):
+            raise
+        message = " ".join(str(exc).split())[:300]
+        print(f"gaitcore: error: unexpected {type(exc).__name__} ({message}); this is a bug: "
+              "please report it with the command (GAITCORE_TRACEBACK=1 shows where)",
+              file=sys.stderr)
         return 2
 
 

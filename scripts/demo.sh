@@ -5,7 +5,7 @@ set -eu
 bin=$1
 out=$2
 export PYOPENGL_PLATFORM="${PYOPENGL_PLATFORM:-egl}"
-"$bin/gaitcore" synth --gait canter --frames 100 --out "$out/clip"
+"$bin/gaitcore" synth --gait canter --frames 100 --out "$out/clip" --overwrite
 "$bin/gaitcore" analyze "$out/clip/masks" --out "$out/analysis" --keys 4 --pcs 2
 "$bin/python" scripts/demo_pose_keys.py "$out/analysis/analysis.json" "$out/clip/poses.csv" "$out/keys.csv"
 "$bin/gaitcore" animate "$out/analysis/analysis.json" --key-poses "$out/keys.csv" \

@@ -34,6 +34,11 @@ TRANSLATION_RANGE_M = 100.0
 LABELS = {"rz": "rz (side view)", "rx": "rx", "ry": "ry", "tx": "tx (m)", "ty": "ty (m)", "tz": "tz (m)"}
 
 
+EXPAND_ALL_JOINTS = 2_000
+"""Rigs up to this many posable joints open with their whole tree expanded; bigger ones
+show the first EXPAND_DEPTH levels."""
+EXPAND_DEPTH = 8
+
 class PosePanel(QWidget):
     """Numeric posing of the current key-image, bound to :class:`AppState`."""
 
@@ -148,7 +153,10 @@ class PosePanel(QWidget):
                 item = QTreeWidgetItem([joint.name])
                 (parent.addChild(item) if parent is not None else self.joints.addTopLevelItem(item))
                 items[joint.name] = item
-            self.joints.expandAll()
+            if len(items) <= EXPAND_ALL_JOINTS:
+                self.joints.expandAll()
+            else:  # Qt's expandAll is slow on very deep trees (a 20,000-joint chain: seconds)
+                self.joints.expandToDepth(EXPAND_DEPTH)
         limits = skeleton.limits_array()
         self._limits = {c: limits[i] for i, c in enumerate(skeleton.channel_names)}
 

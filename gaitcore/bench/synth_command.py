@@ -3,11 +3,14 @@
 Writes ``DIR/images/00000.png...`` (shaded renders), ``DIR/masks/00000.png...`` (single
 channel, 0 or 255), ``DIR/poses.csv`` (``frame`` then one column per channel; metres and
 degrees) and ``DIR/skeleton.json``: the input and the ground truth of the paper's Section 4.
+A folder that is not empty is written into only with ``--overwrite`` (its numbered frames are
+then replaced), so a wrong ``--out`` never touches the user's own images.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import re
 from pathlib import Path
 
@@ -16,6 +19,9 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 
 _FRAME_PNG = re.compile(r"^\d{5}\.png$")
+MAX_FRAMES = 99_999
+"""Frames are named 00000.png to 99999.png."""
+MAX_SIDE_PX = 8192
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -37,14 +43,47 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="frames per gait cycle (walk 40, trot 30, canter 28, gallop 24)")
     p.add_argument("--noise", type=float, default=0.0, metavar="DEG",
                    help="std of Gaussian noise added to every joint angle, degrees (0)")
-    p.add_argument("--seed", type=int, default=None, metavar="S", help="noise seed")
+    p.add_argument("--seed", type=_seed, default=None, metavar="S", help="noise seed (0 or more)")
     p.add_argument("--yaw", type=float, default=0.0, metavar="DEG",
                    help="camera turn about the vertical from the pure side view (0)")
     p.add_argument("--elevation", type=float, default=0.0, metavar="DEG",
                    help="camera elevation, positive looks down (0)")
     p.add_argument("--lead", choices=("left", "right"), default="left",
                    help="leading leg for canter and gallop (left)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="write into a folder that is not empty (its numbered frames are replaced)")
     p.set_defaults(run=run)
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a seed (a whole number from 0)")
+    return value
+
+
+def _check(args: argparse.Namespace) -> None:
+    """Refuse values the renderer cannot honour, before anything is written."""
+    for name, lo, hi in (("frames", 1, MAX_FRAMES), ("width", 8, MAX_SIDE_PX),
+                         ("height", 8, MAX_SIDE_PX)):
+        value = getattr(args, name)
+        if not lo <= value <= hi:
+            raise GaitInputError(f"--{name} must be from {lo} to {hi}, got {value}")
+    for name in ("period", "noise", "yaw", "elevation"):
+        value = getattr(args, name)
+        if value is not None and not math.isfinite(value):
+            raise GaitInputError(f"--{name} must be a finite number, got {value}")
+    if args.noise < 0:
+        raise GaitInputError(f"--noise must be 0 or more degrees, got {args.noise}")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise GaitInputError(f"--out {out} exists and is not a folder; pick a folder path")
+    if out.is_dir() and any(out.iterdir()) and not args.overwrite:
+        raise GaitInputError(f"--out {out} is not empty: pick a new folder, or add --overwrite "
+                             "to replace the clip in it")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -56,14 +95,11 @@ def run(args: argparse.Namespace) -> int:
     from gaitcore.rig.render import iter_render
     from gaitcore.rig.skeleton import load_template
 
-    if args.frames < 1:
-        raise GaitInputError(f"--frames must be at least 1, got {args.frames}")
+    _check(args)
     skeleton = load_template("horse")
     poses = generate_gait(skeleton, args.gait, args.frames, period_frames=args.period,
                           noise_deg=args.noise, seed=args.seed, lead=args.lead)
     out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise GaitInputError(f"--out {out} exists and is not a folder; pick a folder path")
     images, masks = out / "images", out / "masks"
     for folder in (images, masks):
         folder.mkdir(parents=True, exist_ok=True)

@@ -32,6 +32,14 @@ from gaitcore.footage.image_folder import (
     list_image_files,
     read_image,
 )
+from gaitcore.schema import MAX_FPS
+
+# FFmpeg prints every decoding error of a damaged video on stderr (thousands of lines before
+# our one-line error), and OpenCV its own "[ERROR:0@...]" lines: every failure becomes a
+# GaitInputError here, so both are silenced unless the user asked for their logs.
+os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # AV_LOG_QUIET, read at first open
+if "OPENCV_LOG_LEVEL" not in os.environ:
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
 
 
 class _VideoReader:
@@ -334,11 +342,18 @@ def open_frames(
     ------
     GaitInputError
         Missing path; unreadable or undecodable file; zero frames; empty folder;
-        non-image files or images of different sizes in a folder; a bad frame range.
+        non-image files or images of different sizes in a folder; a bad frame range; a frame
+        rate that is not within (0, MAX_FPS]; a path that is neither a file nor a folder.
     """
     p = Path(path)
     if not p.exists():
         raise GaitInputError(f"{p} does not exist: give the path of a video file or image folder")
+    if not (p.is_dir() or p.is_file()):
+        raise GaitInputError(f"{p} is neither a video file nor a folder (a pipe or a device?): "
+                             "give the path of a video file or image folder")
+    if fps is not None and not (np.isfinite(fps) and 0 < fps <= MAX_FPS):
+        raise GaitInputError(f"frame rate {fps} is not a number of frames per second in "
+                             f"(0, {MAX_FPS:g}]")
     if p.is_dir():
         files = list_image_files(p)
         first = read_image(files[0], None)
@@ -435,7 +450,7 @@ def _open_video(p: Path, start: int, stop: int | None, fps: float | None,
         note = (f"{p.name}: its header says {n_header} frames but {n_source} decode; all "
                 f"{n_source} are used")
     s0, s1 = _check_range(start, stop, n_source, p)
-    if fps is None and header_fps > 0 and np.isfinite(header_fps):
+    if fps is None and 0 < header_fps <= MAX_FPS:
         fps = header_fps
     size = (int(first.shape[1]), int(first.shape[0]))
     return FrameSource(p, files=None, n_source=n_source, size=size, fps=fps, start=s0, stop=s1,

@@ -17,9 +17,14 @@ import numpy as np
 from gaitcore.analysis.analyze import Analysis
 from gaitcore.animation.animate import AnalysisRecord, stored
 from gaitcore.errors import GaitInputError
+from gaitcore.schema import MAX_FPS, JsonValue, read_json
 
 FORMAT = "gaitstudio-analysis"
 VERSION = 1
+MAX_VERSION = 1_000_000
+MAX_FRAMES = 10_000_000
+MAX_PCS = 64
+MAX_ANALYSIS_BYTES = 2 << 30
 
 
 def analysis_to_dict(analysis: Analysis, *, source: str = "", fps: float | None = None) -> dict:
@@ -44,9 +49,9 @@ def analysis_to_dict(analysis: Analysis, *, source: str = "", fps: float | None 
         "usable": d.verdict.value == "usable",
         "verdict": d.verdict.value,
         "reason": d.reason,
-        "period_frames": float(d.period_frames),
-        "period_s": None if not fps else float(d.period_frames / fps),
-        "f0": float(d.f0),
+        "period_frames": _finite(d.period_frames),
+        "period_s": _finite(d.period_frames / fps) if fps else None,
+        "f0": _finite(d.f0),
         "band": [float(b) for b in d.band],
         "key_frames": [int(f) for f in analysis.key_frames],
         "condition_number": float(analysis.selection.condition_number),
@@ -63,6 +68,12 @@ def analysis_to_dict(analysis: Analysis, *, source: str = "", fps: float | None 
     if analysis.alternates_note is not None:
         out["alternates_note"] = analysis.alternates_note
     return out
+
+
+def _finite(value: float) -> float | None:
+    """``value`` as a JSON number, or null when it is not finite (no peak, no period)."""
+    value = float(value)
+    return value if np.isfinite(value) else None
 
 
 def write_analysis_json(path: str | Path, analysis: Analysis, *, source: str = "",
@@ -83,52 +94,52 @@ def read_analysis_json(path: str | Path) -> AnalysisRecord:
     GaitInputError
         Missing or malformed file, or inconsistent content.
     """
-    path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise GaitInputError(f"analysis file not found: {path}; run 'gaitcore analyze' first") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise GaitInputError(f"{path} is not a readable analysis file ({exc})") from None
-    return analysis_record_from_dict(data, where=str(path))
+    doc = read_json(path, what="analysis file", max_bytes=MAX_ANALYSIS_BYTES,
+                    advice="run 'gaitcore analyze' again to rewrite it")
+    return analysis_record_from_dict(doc)
 
 
 def analysis_record_from_dict(data: object, *, where: str = "analysis") -> AnalysisRecord:
     """Check the parsed content of an ``analysis.json`` and turn it into a record.
 
+    Parameters
+    ----------
+    data : dict or JsonValue
+        The parsed document (a :class:`~gaitcore.schema.JsonValue` knows its file).
+    where : str
+        Names the document in messages when ``data`` is a plain dict.
+
     Raises
     ------
     GaitInputError
-        Not an analysis, a newer version, missing or malformed fields, inconsistent content.
+        Not an analysis, a newer version, missing or malformed fields (named with their
+        path), inconsistent content.
     """
-    path = where
-    if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise GaitInputError(f"{path} is not a Gait Studio analysis file")
-    if data.get("version", 0) > VERSION:
+    doc = data if isinstance(data, JsonValue) else JsonValue(data, where)
+    if not doc.has("format") or doc.value["format"] != FORMAT:
+        raise GaitInputError(f"{doc.what} is not a Gait Studio analysis file")
+    version = doc.key("version", 1).integer(lo=1, hi=MAX_VERSION)
+    if version > VERSION:
         raise GaitInputError(
-            f"{path} was written by a newer Gait Studio (format version {data['version']}); "
-            "update Gait Studio to read it"
-        )
-    try:
-        n = int(data["n_frames"])
-        proj = np.asarray(data["projections"], dtype=float)
-        filt = np.asarray(data.get("filtered_projections", data["projections"]), dtype=float)
-        theta = np.asarray(data["loop_angle"], dtype=float)
-        first = int(data.get("first_frame", 0))
-        keys = tuple(int(f) for f in data["key_frames"])
-        alts = data.get("alternate_frames")
-        alts = None if alts is None else tuple(int(f) for f in alts)
-        alpha = float(data.get("alpha", np.log(2.0)))
-        period = float(data.get("period_frames") or "nan")
-        fps = data.get("fps")
-        fps = None if fps is None else float(fps)
-    except (KeyError, TypeError, ValueError) as exc:
-        raise GaitInputError(f"{path} is missing or has a malformed field: {exc}") from None
-    if proj.ndim != 2 or proj.shape[0] != n or filt.shape != proj.shape or theta.shape != (n,):
-        raise GaitInputError(f"{path}: projections do not match n_frames = {n}")
-    if not keys or any(not first <= f < first + n for f in keys + (alts or ())):
-        raise GaitInputError(f"{path}: key frames must lie in {first}..{first + n - 1}")
-    if fps is not None and not (np.isfinite(fps) and fps > 0):
-        raise GaitInputError(f"{path}: fps must be a positive number, got {fps}")
-    return AnalysisRecord(n, proj, filt, theta, keys, alts, alpha, period, first_frame=first,
-                          fps=fps)
+            f"{doc.what} was written by a newer Gait Studio (format version {version}); "
+            "update Gait Studio to read it")
+    n = doc.key("n_frames").integer(lo=1, hi=MAX_FRAMES)
+    rows = doc.key("projections").items(min_len=n, max_len=n)
+    pcs = len(rows[0].items(min_len=1, max_len=MAX_PCS))
+    proj = doc.key("projections").array(columns=pcs, min_rows=n, max_rows=n)
+    filt = doc.key("filtered_projections", doc.value["projections"]).array(
+        columns=pcs, min_rows=n, max_rows=n)
+    theta = doc.key("loop_angle").array(min_rows=n, max_rows=n)
+    first = doc.key("first_frame", 0).integer(lo=0, hi=MAX_FRAMES)
+    last = first + n - 1
+    keys = doc.key("key_frames").integers(max_len=MAX_PCS * MAX_PCS, lo=first, hi=last)
+    alts = doc.key("alternate_frames", None)
+    alts = None if alts.is_null() else alts.integers(max_len=len(keys), lo=first, hi=last)
+    alpha = doc.key("alpha", float(np.log(2.0))).number(lo=0, lo_open=True, hi=1e6)
+    period = doc.key("period_frames", None).number(lo=0, lo_open=True, hi=MAX_FRAMES,
+                                                   optional=True)
+    fps = doc.key("fps", None).number(lo=0, lo_open=True, hi=MAX_FPS, optional=True)
+    if not keys:
+        raise doc.key("key_frames").fail(f"a list of key frames in {first}..{last}")
+    return AnalysisRecord(n, proj, filt, theta, keys, alts, alpha,
+                          float("nan") if period is None else period, first_frame=first, fps=fps)

@@ -7,6 +7,7 @@ animation curves ``gaitcore animate`` writes (one row per frame). Angles are in 
 from __future__ import annotations
 
 import csv
+import io
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -14,10 +15,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+from gaitcore.schema import read_text
 
 if TYPE_CHECKING:
     from gaitcore.rig.skeleton import Skeleton
 
+MAX_POSE_BYTES = 1 << 30
+MAX_FRAME = 10**8
 MAX_LISTED = 12
 """Missing channels named in an error message before '... and N more'."""
 MAX_LISTED_JOINTS = 10
@@ -50,57 +54,39 @@ class PoseTable:
 def read_pose_table(path: str | Path) -> PoseTable:
     """Read a pose CSV.
 
+    Rows are parsed as they are read, so memory stays a small multiple of the file.
+
     Raises
     ------
     GaitInputError
-        Missing file, no ``frame`` column, no channel column, a non-numeric or missing
-        value (with its line and column), a fractional or negative frame number, or a frame
+        Missing file or not a regular file, no ``frame`` column, no channel column, a
+        non-numeric, infinite or missing value (with its line and column), a cell longer
+        than the CSV reader allows, a fractional or negative frame number, or a frame
         listed twice.
     """
     path = Path(path)
+    text = read_text(path, what="pose file", max_bytes=MAX_POSE_BYTES, encoding="utf-8-sig")
+    reader = csv.reader(io.StringIO(text, newline=""))
+    header: list[str] | None = None
+    rows: list[np.ndarray] = []
     try:
-        with path.open(newline="", encoding="utf-8-sig") as fh:
-            rows = list(csv.reader(fh))
-    except FileNotFoundError:
-        raise GaitInputError(f"pose file not found: {path}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise GaitInputError(f"cannot read pose file {path}: {exc}") from None
-    rows = [r for r in rows if any(cell.strip() for cell in r)]
-    if not rows:
+        for row in reader:
+            if not any(cell.strip() for cell in row):
+                continue
+            if header is None:
+                header = _header(row, path)
+            else:
+                rows.append(_numbers(row, header, f"pose file {path}, line {reader.line_num}"))
+    except csv.Error as exc:
+        raise GaitInputError(f"pose file {path}, line {reader.line_num}: {exc}; is it a CSV "
+                             "pose table?") from None
+    if header is None:
         raise GaitInputError(f"pose file {path} is empty; expected a header 'frame,<channel>,...'")
-    header = [h.strip() for h in rows[0]]
-    if not header or header[0] != "frame":
-        raise GaitInputError(
-            f"pose file {path}: the first column must be 'frame', found {header[:1]}"
-        )
-    if len(header) < 2:
-        raise GaitInputError(f"pose file {path} has no channel columns after 'frame'")
-    if len(set(header)) != len(header):
-        raise GaitInputError(f"pose file {path} has duplicate column names")
-    values = np.empty((len(rows) - 1, len(header)))
-    for i, row in enumerate(rows[1:]):
-        line = i + 2
-        if len(row) != len(header):
-            raise GaitInputError(
-                f"pose file {path}, line {line}: {len(row)} values for {len(header)} columns"
-            )
-        for j, cell in enumerate(row):
-            try:
-                values[i, j] = float(cell)
-            except ValueError:
-                raise GaitInputError(
-                    f"pose file {path}, line {line}, column '{header[j]}': "
-                    f"'{cell}' is not a number"
-                ) from None
-    if not np.all(np.isfinite(values)):
-        i, j = np.argwhere(~np.isfinite(values))[0]
-        raise GaitInputError(
-            f"pose file {path}, line {i + 2}, column '{header[j]}': value is missing or NaN; "
-            "every channel of every posed frame needs a number"
-        )
+    values = np.array(rows).reshape(len(rows), len(header))
     frames = values[:, 0]
-    if np.any(frames != np.round(frames)) or np.any(frames < 0):
-        raise GaitInputError(f"pose file {path}: frame numbers must be whole numbers from 0")
+    if np.any(frames != np.round(frames)) or np.any(frames < 0) or np.any(frames > MAX_FRAME):
+        raise GaitInputError(f"pose file {path}: frame numbers must be whole numbers from 0 "
+                             f"to {MAX_FRAME}")
     frames = frames.astype(int)
     uniq, counts = np.unique(frames, return_counts=True)
     if np.any(counts > 1):
@@ -108,6 +94,50 @@ def read_pose_table(path: str | Path) -> PoseTable:
             f"pose file {path}: frame {int(uniq[counts > 1][0])} is listed twice; keep one row per frame"
         )
     return PoseTable(frames=frames, columns=tuple(header[1:]), values=values[:, 1:])
+
+
+def _header(row: list[str], path: Path) -> list[str]:
+    header = [h.strip() for h in row]
+    if header[0] != "frame":
+        raise GaitInputError(
+            f"pose file {path}: the first column must be 'frame', found '{_shown(header[0])}'"
+        )
+    if len(header) < 2:
+        raise GaitInputError(f"pose file {path} has no channel columns after 'frame'")
+    if len(set(header)) != len(header):
+        raise GaitInputError(f"pose file {path} has duplicate column names")
+    return header
+
+
+def _numbers(row: list[str], header: list[str], where: str) -> np.ndarray:
+    """One data row as finite floats; ``where`` names the file and line in messages."""
+    if len(row) != len(header):
+        raise GaitInputError(f"{where}: {len(row)} values for {len(header)} columns")
+    try:
+        values = np.array([float(cell) for cell in row])
+    except ValueError:
+        j, cell = next((j, c) for j, c in enumerate(row) if not _is_number(c))
+        raise GaitInputError(f"{where}, column '{_shown(header[j])}': '{_shown(cell)}' is not "
+                             "a number") from None
+    if not np.all(np.isfinite(values)):
+        j = int(np.argmin(np.isfinite(values)))
+        raise GaitInputError(f"{where}, column '{_shown(header[j])}': value is missing or NaN or "
+                             "infinite; every channel of every posed frame needs a number")
+    return values
+
+
+def _shown(text: str) -> str:
+    """``text`` on one short line, for a message."""
+    text = " ".join(text.split())
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def write_pose_table(path: str | Path, table: PoseTable, *, fps: float | None = None) -> None:

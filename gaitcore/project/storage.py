@@ -28,14 +28,32 @@ import numpy as np
 
 from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.errors import GaitInputError
-from gaitcore.project.document import AnimationOptions, FootageFit, Project, Silhouettes
+from gaitcore.project.document import ORIGINS, AnimationOptions, FootageFit, Project, Silhouettes
 from gaitcore.rig.skeleton import Skeleton
+from gaitcore.schema import MAX_FPS, JsonValue, read_json, read_npy
 from gaitcore.silhouettes.annotations import Rect, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
 
 FORMAT = "gaitstudio-project"
 VERSION = 3
 SUFFIX = ".gaitproj"
+_ADVICE = ("the file is damaged: restore it from a backup or the recovery copy (Gait Studio "
+           "did not change it)")
+MAX_PROJECT_BYTES = 1 << 30
+MAX_ARRAY_BYTES = 16 << 30
+MAX_FRAME = 10**8
+"""Largest frame number a project may name (a day of footage at 1,000 fps)."""
+MAX_PIXELS = 1 << 20
+MAX_RECTS = 1_000
+"""Rectangles per kind: a few seed the colour models; thousands are a damaged file."""
+MAX_STROKES = 20_000
+"""Strokes in a project: a thousand sketched frames of twenty strokes. 200,000 took the
+window 20 s to open; a file with more is refused with this limit named."""
+MAX_STROKE_POINTS = 100_000
+MAX_KEYS = 64
+MAX_FRAME_LIST = 100_000
+MAX_CHANNELS = 6 * 100_000
+_TEMPORARY = re.compile(r"^\.(.+)\.[0-9]+\.tmp$")
 _ARRAY_NAME = re.compile(r"^(crops|crops_packed|centers_xy|lost)-[0-9a-f]{16}\.npy$")
 
 
@@ -66,6 +84,12 @@ def save_project(project: Project, path: str | os.PathLike) -> None:
     GaitInputError
         When ``path`` holds a project of a newer format version (it is never overwritten) or
         the folder cannot be written.
+
+    Notes
+    -----
+    Temporary files left by a save that was killed (``.<name>.<pid>.tmp`` of another
+    process) are removed first; two processes saving the same project at once are not
+    supported.
     """
     p = Path(path).absolute()
     if p.exists():
@@ -73,6 +97,7 @@ def save_project(project: Project, path: str | os.PathLike) -> None:
     side = sidecar_dir(p)
     try:
         side.mkdir(parents=True, exist_ok=True)
+        _remove_stale_temporaries(p, side)
         doc = _to_json(project, p.parent, side)
         write_atomic(p, (json.dumps(doc, indent=1) + "\n").encode("utf-8"))
         keep = set(doc["silhouettes"]["arrays"].values()) if doc["silhouettes"] else set()
@@ -89,25 +114,26 @@ def load_project(path: str | os.PathLike) -> Project:
 
     The footage path is resolved relative to the project file first, then as the absolute
     path it had when saved; when neither exists the relative one is kept and
-    :func:`missing_footage` reports it (the GUI then asks where the clip went).
+    :func:`missing_footage` reports it (the GUI then asks where the clip went). Every value is
+    checked (type, finiteness, range, size) before it is used, so a damaged file fails here
+    rather than later in the window.
 
     Raises
     ------
     GaitInputError
         Missing file, not a Gait Studio project, a newer format version, damaged JSON or
-        arrays. The file is left untouched.
+        arrays, or a value out of place (the message names it, e.g. ``strokes[3].width_px``).
+        The file is left untouched.
     """
     p = Path(path).absolute()
     doc = _read_doc(p)
     try:
         return _from_json(doc, p)
-    except (KeyError, TypeError, ValueError, IndexError) as exc:
-        if isinstance(exc, GaitInputError):
+    except GaitInputError as exc:
+        message = str(exc)
+        if str(p) in message:
             raise
-        raise GaitInputError(
-            f"project file {p} is damaged ({type(exc).__name__}: {exc}); restore it from a "
-            "backup or the recovery copy: Gait Studio did not change it"
-        ) from None
+        raise GaitInputError(f"project file {p}: {message}; {_ADVICE}") from None
 
 
 # -- JSON documents --------------------------------------------------------------------
@@ -155,89 +181,130 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
     }
 
 
-def _from_json(doc: dict, p: Path) -> Project:
-    footage = None
-    if doc["footage"] is not None:
-        rel, absolute = doc["footage"].get("relative"), doc["footage"].get("absolute")
-        candidates = [(p.parent / rel).resolve()] if rel else []
-        candidates += [Path(absolute)] if absolute else []
-        if not candidates:
-            raise KeyError("footage has neither a relative nor an absolute path")
-        footage = next((c for c in candidates if c.exists()), candidates[0])
-    settings = dict(doc["settings"])
-    for name in ("pinned", "forbidden"):
-        settings[name] = tuple(int(f) for f in settings.get(name, ()))
-    known = AnalysisSettings.__dataclass_fields__
-    sil = doc["silhouettes"]
-    trimmed = doc["version"] >= 3  # before, the range cut the footage itself and no editor set it
+def _from_json(doc: JsonValue, p: Path) -> Project:
+    sil = doc.key("silhouettes", None)
+    skeleton = doc.key("skeleton", None)
+    start = doc.key("frame_start").integer(lo=0, hi=MAX_FRAME)
+    stop = doc.key("frame_stop").integer(lo=1, hi=MAX_FRAME, optional=True)
+    if doc.key("version").value < 3:  # the range cut the footage itself and no editor set it
+        start, stop = 0, None
     return Project(
-        footage=footage,
-        frame_start=int(doc["frame_start"]) if trimmed else 0,
-        frame_stop=None if not trimmed or doc["frame_stop"] is None else int(doc["frame_stop"]),
-        fps=None if doc["fps"] is None else float(doc["fps"]),
-        subject_rects=tuple(Rect(*r) for r in doc["subject_rects"]),
-        background_rects=tuple(Rect(*r) for r in doc["background_rects"]),
-        strokes=tuple(Stroke(np.array(s["points_xy"], dtype=np.float64).reshape(-1, 2),
-                             s["width_px"], s["frame"]) for s in doc["strokes"]),
-        settings=AnalysisSettings(**{k: v for k, v in settings.items() if k in known}),
-        alternates=tuple(int(f) for f in doc["alternates"]),
-        key_poses={int(k): tuple(v) for k, v in doc["key_poses"].items()},
-        silhouettes=None if sil is None else _read_silhouettes(sil, sidecar_dir(p)),
-        skeleton=None if doc.get("skeleton") is None else Skeleton.from_json(doc["skeleton"]),
-        animation=_options(AnimationOptions, doc.get("animation", {}), "animation options"),
-        footage_fit=_options(FootageFit, doc.get("footage_fit", {}), "footage fit"),
+        footage=_footage(doc.key("footage"), p),
+        frame_start=start,
+        frame_stop=stop,
+        fps=doc.key("fps").number(lo=0, lo_open=True, hi=MAX_FPS, optional=True),
+        subject_rects=_rects(doc.key("subject_rects")),
+        background_rects=_rects(doc.key("background_rects")),
+        strokes=tuple(_stroke(s) for s in doc.key("strokes").items(max_len=MAX_STROKES)),
+        settings=_settings(doc.key("settings")),
+        alternates=doc.key("alternates").integers(max_len=MAX_KEYS, lo=0, hi=MAX_FRAME),
+        key_poses=_key_poses(doc.key("key_poses")),
+        silhouettes=None if sil.is_null() else _read_silhouettes(sil, sidecar_dir(p)),
+        skeleton=None if skeleton.is_null() else Skeleton.from_json(skeleton),
+        animation=_options(AnimationOptions, doc.key("animation", {})),
+        footage_fit=_options(FootageFit, doc.key("footage_fit", {})),
     )
 
 
-def _options(cls: type, entry: object, what: str):
+def _footage(entry: JsonValue, p: Path) -> Path | None:
+    if entry.is_null():
+        return None
+    rel = entry.key("relative", None).text(optional=True)
+    absolute = entry.key("absolute", None).text(optional=True)
+    candidates = [(p.parent / rel).resolve()] if rel else []
+    candidates += [Path(absolute)] if absolute else []
+    if not candidates:
+        raise entry.fail("an object with a relative or an absolute path")
+    return next((c for c in candidates if c.exists()), candidates[0])
+
+
+def _rects(entry: JsonValue) -> tuple[Rect, ...]:
+    out = []
+    for item in entry.items(max_len=MAX_RECTS):
+        x, y, w, h = item.integers(length=4, lo=-MAX_PIXELS, hi=MAX_PIXELS)
+        if w <= 0 or h <= 0:
+            raise item.fail("a rectangle [x, y, w, h] of positive width and height")
+        out.append(Rect(x, y, w, h))
+    return tuple(out)
+
+
+def _stroke(entry: JsonValue) -> Stroke:
+    points = entry.key("points_xy").array(columns=2, min_rows=1, max_rows=MAX_STROKE_POINTS)
+    width = entry.key("width_px").number(lo=0, lo_open=True, hi=MAX_PIXELS)
+    return Stroke(points, width, entry.key("frame").integer(lo=0, hi=MAX_FRAME))
+
+
+def _settings(entry: JsonValue) -> AnalysisSettings:
+    """Analysis settings; absent fields keep their defaults, unknown ones are ignored."""
+    values = {}
+    for name, read in _SETTINGS.items():
+        if entry.has(name):
+            values[name] = read(entry.key(name))
+    return AnalysisSettings(**values)
+
+
+def _frames(entry: JsonValue) -> tuple[int, ...]:
+    return entry.integers(max_len=MAX_FRAME_LIST, lo=0, hi=MAX_FRAME)
+
+
+_SETTINGS = {
+    "pcs": lambda v: v.integer(lo=1, hi=MAX_KEYS),
+    "keys": lambda v: v.integer(lo=1, hi=MAX_KEYS),
+    "switching": JsonValue.boolean,
+    "alpha": lambda v: v.number(lo=0, lo_open=True, hi=1e6),
+    "max_side_px": lambda v: v.integer(lo=8, hi=MAX_PIXELS, optional=True),
+    "stabilize_roi": JsonValue.boolean,
+    "key_time_limit_s": lambda v: v.number(lo=0, lo_open=True, hi=1e9, optional=True),
+    "pinned": _frames,
+    "forbidden": _frames,
+}
+"""How each field of AnalysisSettings is read."""
+
+
+def _key_poses(entry: JsonValue) -> dict[int, tuple[float, ...]]:
+    poses = {}
+    for key, pose in entry.entries(max_len=MAX_FRAME_LIST):
+        if not (key.isascii() and key.isdigit() and len(key) <= 10):
+            raise pose.fail("the pose of a frame keyed by its number (a whole number from 0)")
+        poses[int(key)] = tuple(pose.array(max_rows=MAX_CHANNELS).tolist())
+    return poses
+
+
+def _options(cls: type, entry: JsonValue):
     """A small options dataclass (``cls``) from its JSON object.
 
     Fields absent from ``entry`` keep their defaults (projects saved before they existed);
-    each present one must have the type of its default (true/false, a number, or a string).
+    each present one must have the type of its default (true/false, a finite number, or a
+    string).
     """
-    if not isinstance(entry, dict):
-        raise TypeError(f"{what} must be an object, got {entry!r}")
     defaults, values = cls(), {}
-    for name in cls.__dataclass_fields__.keys() & entry.keys():
-        value, default = entry[name], getattr(defaults, name)
-        flag, text = isinstance(default, bool), isinstance(default, str)
-        if isinstance(value, bool) != flag or isinstance(value, str) != text or \
-                not isinstance(value, (bool, int, float, str)):
-            kind = "true or false" if flag else "a string" if text else "a number"
-            raise TypeError(f"{what}: {name} must be {kind}, got {value!r}")
-        values[name] = value
+    for name, value in entry.entries(max_len=len(cls.__dataclass_fields__) + 64):
+        if name in cls.__dataclass_fields__:
+            default = getattr(defaults, name)
+            if isinstance(default, bool):
+                values[name] = value.boolean()
+            elif isinstance(default, str):
+                values[name] = value.text(max_len=64)
+            else:
+                values[name] = value.number()
     try:
         return cls(**values)
-    except GaitInputError as exc:  # reported as a damaged file, like every bad entry
-        raise ValueError(str(exc)) from None
+    except GaitInputError as exc:
+        raise entry.fail(f"valid ({exc})") from None
 
 
-def _read_doc(p: Path) -> dict:
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise GaitInputError(f"project file {p} does not exist: choose another file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise GaitInputError(f"project file {p} cannot be read ({exc}): it is damaged or not "
-                             "a Gait Studio project") from None
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise GaitInputError(
-            f"project file {p} is damaged (invalid JSON at line {exc.lineno}); restore it from "
-            "a backup or the recovery copy: Gait Studio did not change it"
-        ) from None
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+def _read_doc(p: Path) -> JsonValue:
+    doc = read_json(p, what="project file", max_bytes=MAX_PROJECT_BYTES, advice=_ADVICE)
+    if not doc.has("format") or doc.key("format").value != FORMAT:
         raise GaitInputError(f"{p} is not a Gait Studio project (no \"format\": \"{FORMAT}\")")
-    version = doc.get("version")
-    if not isinstance(version, int) or isinstance(version, bool) or version < 1:
-        raise GaitInputError(f"project file {p} is damaged: its version {version!r} is not a "
-                             "positive integer")
-    if version > VERSION:
+    version = doc.key("version")
+    if not isinstance(version.value, int) or isinstance(version.value, bool) or version.value < 1:
+        raise version.fail("a positive integer")
+    if version.value > VERSION:
         raise GaitInputError(
-            f"project file {p} was written by a newer Gait Studio (format version {version}; "
-            f"this one reads up to {VERSION}): update Gait Studio to open it. The file was not "
-            "changed"
+            f"project file {p} was written by a newer Gait Studio (format version "
+            f"{version.value}; this one reads up to {VERSION}): update Gait Studio to open it. "
+            "The file was not changed"
         )
     return doc
 
@@ -245,9 +312,10 @@ def _read_doc(p: Path) -> dict:
 def _refuse_newer(p: Path) -> None:
     """Raise when ``p`` is a project of a newer version (anything else may be replaced)."""
     try:
-        version = json.loads(p.read_text(encoding="utf-8")).get("version")
-    except (OSError, UnicodeDecodeError, ValueError, AttributeError):
+        doc = read_json(p, what="project file", max_bytes=MAX_PROJECT_BYTES)
+    except GaitInputError:  # unreadable, or not a regular file: replaced like any other
         return
+    version = doc.value.get("version") if isinstance(doc.value, dict) else None
     if isinstance(version, int) and version > VERSION:
         raise GaitInputError(
             f"{p} holds a project of a newer Gait Studio (format version {version}): it is not "
@@ -266,43 +334,61 @@ def _write_array(side: Path, stem: str, arr: np.ndarray) -> str:
     return name
 
 
-def _read_silhouettes(sil: dict, side: Path) -> Silhouettes:
-    arrays = sil["arrays"]
-    if "crops_packed" in arrays:  # version 2
-        n, rows, cols = (int(v) for v in sil["crops_shape"])
-        packed = _read_array(side, arrays["crops_packed"], "u", 3)
+def _read_silhouettes(sil: JsonValue, side: Path) -> Silhouettes:
+    arrays = sil.key("arrays")
+    if arrays.has("crops_packed"):  # version 2
+        n, rows, cols = sil.key("crops_shape").integers(length=3, lo=1, hi=MAX_PIXELS)
+        packed = _read_array(side, arrays.key("crops_packed"), "u", 3)
         if packed.dtype != np.uint8 or packed.shape != (n, rows, -(-cols // 8)):
-            raise GaitInputError(f"{side / arrays['crops_packed']} does not hold {n} crops of "
-                                 f"{rows} x {cols} pixels: the project is damaged")
+            raise GaitInputError(f"{side / arrays.key('crops_packed').value} does not hold {n} "
+                                 f"crops of {rows} x {cols} pixels: the project is damaged")
         crops = np.unpackbits(packed, axis=-1, count=cols).view(bool)
     else:
-        crops = _read_array(side, arrays["crops"], "b", 3)
-    centers = _read_array(side, arrays["centers_xy"], "f", 2)
-    lost = _read_array(side, arrays["lost"], "b", 1)
-    roi = RoiClip(crops=crops, centers_xy=centers, lost=lost, scale=float(sil["scale"]))
-    return Silhouettes(roi, str(sil["origin"]))
+        crops = _read_array(side, arrays.key("crops"), "b", 3)
+    centers = _read_array(side, arrays.key("centers_xy"), "f", 2)
+    lost = _read_array(side, arrays.key("lost"), "b", 1)
+    if centers.shape == (len(lost), 2) and not np.all(np.isfinite(centers[~lost])):
+        raise GaitInputError(f"{side / arrays.key('centers_xy').value} holds a centre that is not "
+                             "a finite number on a frame where the subject was found: the "
+                             "project is damaged")
+    scale = sil.key("scale").number(lo=0, lo_open=True, hi=MAX_PIXELS)
+    origin = sil.key("origin").text(choices=ORIGINS)
+    return Silhouettes(RoiClip(crops=crops, centers_xy=centers, lost=lost, scale=scale), origin)
 
 
-def _read_array(side: Path, name: str, kind: str, ndim: int) -> np.ndarray:
-    if not isinstance(name, str) or not _ARRAY_NAME.match(name):
-        raise GaitInputError(f"project array name {name!r} is not one Gait Studio writes: the "
-                             "project file is damaged")
-    f = side / name
+def _read_array(side: Path, name: JsonValue, kind: str, ndim: int) -> np.ndarray:
+    text = name.text()
+    if not _ARRAY_NAME.match(text):
+        raise name.fail("the name of an array Gait Studio writes")
+    if not side.is_dir():
+        raise GaitInputError(f"{side / text} is missing: keep the folder {side.name} beside the "
+                             "project file (or restore it from a backup)")
     try:
-        arr = np.load(f, allow_pickle=False)
-    except FileNotFoundError:
-        raise GaitInputError(f"{f} is missing: keep the folder {side.name} beside the project "
-                             "file (or restore it from a backup)") from None
-    except (OSError, ValueError) as exc:
-        raise GaitInputError(f"{f} is damaged ({exc}); restore it from a backup") from None
-    if arr.dtype.kind != kind or arr.ndim != ndim:
-        raise GaitInputError(f"{f} holds a {arr.ndim}-D {arr.dtype} array, not the expected "
-                             "silhouette data: the project is damaged")
-    return arr
+        return read_npy(side / text, what="project array", kind=kind, ndim=ndim,
+                        max_bytes=MAX_ARRAY_BYTES)
+    except GaitInputError as exc:
+        if "not found" not in str(exc):
+            raise
+        raise GaitInputError(f"{side / text} is missing: keep the folder {side.name} beside the "
+                             "project file (or restore it from a backup)") from None
+
+
+def _remove_stale_temporaries(p: Path, side: Path) -> None:
+    """Delete what killed saves of ``p`` left: temporary files of other processes."""
+    ours = f".{os.getpid()}.tmp"
+    for folder, names in ((p.parent, lambda n: n == p.name), (side, _ARRAY_NAME.match)):
+        for f in folder.glob(".*.tmp"):
+            m = _TEMPORARY.match(f.name)
+            if m and names(m.group(1)) and not f.name.endswith(ours) and f.is_file():
+                f.unlink(missing_ok=True)
 
 
 def write_atomic(path: Path, data: bytes) -> None:
-    """Write ``data`` to a temporary file beside ``path``, fsync it, rename it over ``path``."""
+    """Write ``data`` to a temporary file beside ``path``, fsync it, rename it over ``path``.
+
+    The temporary file is ``.<name>.<pid>.tmp``; a crash leaves it behind, and the next
+    :func:`save_project` of the same project removes it.
+    """
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
         with open(tmp, "wb") as fh:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 from importlib.resources import files
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,7 @@ import numpy as np
 
 from gaitcore.errors import GaitInputError
 from gaitcore.rig.rotations import euler_zxy_matrix
+from gaitcore.schema import JsonValue, describe, read_json
 
 FORMAT = "gaitstudio-skeleton"
 VERSION = 1
@@ -40,6 +42,9 @@ BONE_END_ROUNDING = 0.6
 """A bone ellipsoid's half-length along the bone is BONE_LENGTH_SCALE * length / 2 plus
 BONE_END_ROUNDING * its smaller radius, so that neighbouring ellipsoids overlap at the joints
 and thick short bones (the trunk) merge into one body instead of a string of discs."""
+MAX_JOINTS = 100_000
+"""Joints a skeleton file may hold (rigs have tens to a few hundred)."""
+MAX_SKELETON_BYTES = 256 << 20
 
 
 @dataclass(frozen=True)
@@ -132,6 +137,8 @@ class Skeleton:
     offsets: np.ndarray = field(init=False, repr=False)
     _chan_joint: np.ndarray = field(init=False, repr=False)
     _chan_slot: np.ndarray = field(init=False, repr=False)
+    _joint_at: dict[str, int] = field(init=False, repr=False)
+    _channel_at: dict[str, int] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         _validate(self.joints)
@@ -144,6 +151,8 @@ class Skeleton:
                 cs.append(CHANNEL_ORDER.index(ch))  # slots 0..2 translation, 3..5 rz, rx, ry
         parents = np.array([-1 if j.parent is None else index[j.parent] for j in self.joints])
         object.__setattr__(self, "channel_names", tuple(names))
+        object.__setattr__(self, "_joint_at", index)
+        object.__setattr__(self, "_channel_at", {c: i for i, c in enumerate(names)})
         object.__setattr__(self, "parents", parents)
         object.__setattr__(self, "offsets", np.array([j.offset for j in self.joints], float))
         object.__setattr__(self, "_chan_joint", np.array(cj, dtype=int))
@@ -168,33 +177,25 @@ class Skeleton:
             Unreadable file, wrong format or version, or an invalid joint list (unknown
             parent, cycle, duplicate name, bad channels, limits or mirror partners).
         """
-        if isinstance(source, Mapping):
-            doc, where = source, "skeleton"
+        if isinstance(source, JsonValue):
+            doc = source
+        elif isinstance(source, Mapping):
+            doc = JsonValue(dict(source), "skeleton")
         else:
-            path = Path(source)
-            try:
-                doc = json.loads(path.read_text(encoding="utf-8"))
-            except FileNotFoundError:
-                raise GaitInputError(f"skeleton file not found: {path}") from None
-            except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-                raise GaitInputError(f"cannot read skeleton file {path}: {exc}") from None
-            where = str(path)
-        if not isinstance(doc, Mapping):
-            raise GaitInputError(f"{where}: expected a JSON object with a 'joints' list")
-        if doc.get("format") != FORMAT or doc.get("version") != VERSION:
-            raise GaitInputError(
-                f"{where}: expected format {FORMAT!r} version {VERSION}, got "
-                f"{doc.get('format')!r} version {doc.get('version')!r}"
-            )
+            doc = read_json(source, what="skeleton file", max_bytes=MAX_SKELETON_BYTES)
+        if not isinstance(doc.value, dict):
+            raise doc.fail("a JSON object with a 'joints' list")
+        found = (doc.value.get("format"), doc.value.get("version"))
+        if found != (FORMAT, VERSION) or isinstance(found[1], bool):
+            raise GaitInputError(f"{doc.what}: expected format {FORMAT!r} version {VERSION}, "
+                                 f"got {describe(found[0])} version {describe(found[1])}")
         for key, want in (("units", "m"), ("up_axis", "Y"), ("forward_axis", "X"),
                           ("rotation_order", "ZXY"), ("angle_units", "deg")):
-            if key in doc and doc[key] != want:
-                raise GaitInputError(f"{where}: {key} must be {want!r}, got {doc[key]!r}")
-        raw = doc.get("joints")
-        if not isinstance(raw, list) or not raw:
-            raise GaitInputError(f"{where}: 'joints' must be a non-empty list")
-        joints = tuple(_parse_joint(item, k, where) for k, item in enumerate(raw))
-        return cls(name=str(doc.get("name", "skeleton")), joints=joints)
+            if doc.has(key) and doc.value[key] != want:
+                raise doc.key(key).fail(repr(want))
+        items = doc.key("joints").items(min_len=1, max_len=MAX_JOINTS)
+        joints = tuple(_parse_joint(item) for item in items)
+        return cls(name=doc.key("name", "skeleton").text(max_len=256), joints=joints)
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON document of this skeleton (see :meth:`from_json`)."""
@@ -240,16 +241,16 @@ class Skeleton:
 
     def joint_index(self, name: str) -> int:
         """Index of the joint called ``name``; GaitInputError if there is none."""
-        for i, j in enumerate(self.joints):
-            if j.name == name:
-                return i
-        raise GaitInputError(f"skeleton {self.name!r} has no joint {name!r}")
+        try:
+            return self._joint_at[name]
+        except KeyError:
+            raise GaitInputError(f"skeleton {self.name!r} has no joint {name!r}") from None
 
     def channel_index(self, name: str) -> int:
         """Index in the pose vector of channel ``name`` ("<joint>.<channel>")."""
         try:
-            return self.channel_names.index(name)
-        except ValueError:
+            return self._channel_at[name]
+        except KeyError:
             raise GaitInputError(f"skeleton {self.name!r} has no channel {name!r}") from None
 
     def channel_indices(self, channel: str) -> np.ndarray:
@@ -404,49 +405,28 @@ def load_template(name: str) -> Skeleton:
     return Skeleton.from_json(path)
 
 
-def _parse_joint(item: Any, k: int, where: str) -> Joint:
-    if not isinstance(item, Mapping):
-        raise GaitInputError(f"{where}: joint #{k} must be a JSON object")
-    name = item.get("name")
-    if not isinstance(name, str) or not name or "." in name:
-        raise GaitInputError(f"{where}: joint #{k} needs a non-empty 'name' without dots")
-    what = f"{where}: joint {name!r}"
-    parent = item.get("parent")
-    if parent is not None and not isinstance(parent, str):
-        raise GaitInputError(f"{what}: 'parent' must be a joint name or null")
-    offset = item.get("offset")
-    try:
-        offset_t = tuple(float(v) for v in offset)
-    except (TypeError, ValueError):
-        offset_t = ()
-    if len(offset_t) != 3 or not np.all(np.isfinite(offset_t)):
-        raise GaitInputError(f"{what}: 'offset' must be three finite numbers (metres)")
-    channels = item.get("channels", [])
-    if not isinstance(channels, list) or not all(isinstance(c, str) for c in channels):
-        raise GaitInputError(f"{what}: 'channels' must be a list of channel names")
-    raw_limits = item.get("limits") or {}
-    if not isinstance(raw_limits, Mapping):
-        raise GaitInputError(f"{what}: 'limits' must be an object like {{\"rz\": [-30, 30]}}")
-    limits: dict[str, tuple[float, float]] = {}
-    for ch, bounds in raw_limits.items():
-        try:
-            lo, hi = (float(v) for v in bounds)
-        except (TypeError, ValueError):
-            raise GaitInputError(f"{what}: limits of {ch!r} must be [lower, upper]") from None
-        limits[ch] = (lo, hi)
-    bone = item.get("bone")
-    radii = color = None
-    if bone is not None:
-        try:
-            radii = tuple(float(v) for v in bone["radii"])
-            color = tuple(float(v) for v in bone.get("color", (0.5, 0.5, 0.5)))
-        except (TypeError, ValueError, KeyError):
-            raise GaitInputError(
-                f"{what}: 'bone' must be {{'radii': [a, b], 'color': [r, g, b]}}") from None
-        if len(radii) != 2 or min(radii) <= 0 or len(color) != 3:
-            raise GaitInputError(f"{what}: bone radii must be two positive numbers, color three")
-    return Joint(name, parent, offset_t, tuple(channels), limits, str(item.get("side", "C")),
-                 item.get("mirror"), radii, color or (0.5, 0.5, 0.5))
+def _parse_joint(item: JsonValue) -> Joint:
+    name = item.key("name").text(max_len=256)
+    if not name or "." in name:
+        raise item.key("name").fail("a non-empty name without dots")
+    offset = item.key("offset").floats(length=3)
+    channels = tuple(c.text(max_len=2) for c in item.key("channels", []).items(max_len=6))
+    limits = {}
+    raw_limits = item.key("limits", None)
+    if not raw_limits.is_null():
+        for ch, bounds in raw_limits.entries(max_len=6):
+            lo, hi = bounds.floats(length=2)
+            limits[ch] = (lo, hi)
+    radii, color = None, (0.5, 0.5, 0.5)
+    bone = item.key("bone", None)
+    if not bone.is_null():
+        radii = bone.key("radii").floats(length=2)
+        color = bone.key("color", [0.5, 0.5, 0.5]).floats(length=3)
+        if min(radii) <= 0:
+            raise bone.key("radii").fail("two positive numbers")
+    return Joint(name, item.key("parent", None).text(max_len=256, optional=True), offset,
+                 channels, limits, item.key("side", "C").text(max_len=1),
+                 item.key("mirror", None).text(max_len=256, optional=True), radii, color)
 
 
 def _validate(joints: tuple[Joint, ...]) -> None:
@@ -458,13 +438,7 @@ def _validate(joints: tuple[Joint, ...]) -> None:
     for j in joints:
         if j.parent is not None and j.parent not in index:
             raise GaitInputError(f"joint {j.name!r} has unknown parent {j.parent!r}")
-    for j in joints:  # walk up from every joint: a cycle never reaches a root
-        seen, cur = {j.name}, j
-        while cur.parent is not None:
-            if cur.parent in seen:
-                raise GaitInputError(f"joint hierarchy has a cycle through {cur.parent!r}")
-            seen.add(cur.parent)
-            cur = joints[index[cur.parent]]
+    _refuse_cycles(joints, index)
     roots = [j.name for j in joints if j.parent is None]
     if roots != [joints[0].name]:
         raise GaitInputError(f"the first joint must be the only root (parent null), got {roots}")
@@ -491,17 +465,42 @@ def _validate(joints: tuple[Joint, ...]) -> None:
             )
 
 
+def _refuse_cycles(joints: tuple[Joint, ...], index: dict[str, int]) -> None:
+    """Raise when walking up the parents from some joint never reaches a root.
+
+    Each joint is visited once: a walk stops at the first joint already known to reach a
+    root, so the check is linear in the number of joints, whatever the depth.
+    """
+    reaches_root = [False] * len(joints)
+    for start in range(len(joints)):
+        path, on_path, cur = [], set(), start
+        while not reaches_root[cur] and joints[cur].parent is not None:
+            if cur in on_path:
+                raise GaitInputError(f"joint hierarchy has a cycle through {joints[cur].name!r}")
+            path.append(cur)
+            on_path.add(cur)
+            cur = index[joints[cur].parent]
+        for k in path + [cur]:
+            reaches_root[k] = True
+
+
 def _validate_channels(j: Joint) -> None:
-    chans = j.channels
-    if any(c not in CHANNEL_ORDER for c in chans) or len(set(chans)) != len(chans):
-        raise GaitInputError(f"joint {j.name!r}: channels {list(chans)} must be distinct names "
-                             f"from {list(CHANNEL_ORDER)}")
-    if list(chans) != sorted(chans, key=CHANNEL_ORDER.index):
-        raise GaitInputError(f"joint {j.name!r}: channels must follow the order "
-                             f"{list(CHANNEL_ORDER)} (rotation order Z, X, Y)")
-    if j.parent is not None and any(c.startswith("t") for c in chans):
-        raise GaitInputError(f"joint {j.name!r}: only the root may have translation channels")
+    problem = _channel_problem(j.channels, j.parent is None)
+    if problem:
+        raise GaitInputError(f"joint {j.name!r}: {problem}")
     for ch, (lo, hi) in j.limits.items():
-        if ch not in chans or ch not in ROTATION_CHANNELS or not lo <= hi:
+        if ch not in j.channels or ch not in ROTATION_CHANNELS or not lo <= hi:
             raise GaitInputError(f"joint {j.name!r}: limits for {ch!r} must name one of its "
                                  f"rotation channels with lower <= upper")
+
+
+@lru_cache(maxsize=256)
+def _channel_problem(chans: tuple[str, ...], root: bool) -> str:
+    """What is wrong with a joint's channel list ("" when nothing); rigs repeat a few lists."""
+    if any(c not in CHANNEL_ORDER for c in chans) or len(set(chans)) != len(chans):
+        return f"channels {list(chans)} must be distinct names from {list(CHANNEL_ORDER)}"
+    if list(chans) != sorted(chans, key=CHANNEL_ORDER.index):
+        return f"channels must follow the order {list(CHANNEL_ORDER)} (rotation order Z, X, Y)"
+    if not root and any(c.startswith("t") for c in chans):
+        return "only the root may have translation channels"
+    return ""

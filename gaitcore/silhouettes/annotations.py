@@ -13,6 +13,14 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 
 
+def _is_whole(value: object) -> bool:
+    """True for a whole number that fits a float (``3``, ``3.0``; not ``1e400`` or ``"3"``)."""
+    try:
+        return float(value).is_integer()
+    except (TypeError, ValueError, OverflowError):
+        return False
+
+
 @dataclass(frozen=True)
 class Rect:
     """An axis-aligned rectangle in pixels: columns ``x .. x+w-1``, rows ``y .. y+h-1``.
@@ -43,7 +51,7 @@ class Rect:
     def __post_init__(self) -> None:
         for name in ("x", "y", "w", "h"):
             value = getattr(self, name)
-            if isinstance(value, bool) or not float(value).is_integer():
+            if isinstance(value, bool) or not _is_whole(value):
                 raise GaitInputError(f"rectangle {name}={value!r} is not a whole number of pixels")
             object.__setattr__(self, name, int(value))
         if self.w <= 0 or self.h <= 0:

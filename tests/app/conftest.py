@@ -191,6 +191,11 @@ def wait_ready(qtbot, window, timeout_ms: int = 30_000) -> None:
     qtbot.waitUntil(lambda: window.state.n_frames > 0 and window.is_ready(), timeout=timeout_ms)
 
 
+def wait_jobs(qtbot, window, timeout_ms: int = 30_000) -> None:
+    """Wait until every background job of the window (file reads, analyses) has finished."""
+    qtbot.waitUntil(lambda: not window.runner.busy, timeout=timeout_ms)
+
+
 def viewport_pos(view, scene_item, xy):
     """Viewport position (QPoint) of point ``xy`` in the coordinates of a pyqtgraph view box."""
     scene = scene_item.mapViewToScene(QPointF(*xy))

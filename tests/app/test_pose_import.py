@@ -7,6 +7,7 @@ import pytest
 
 from gaitcore.io.bvh.writer import write_bvh
 from gaitcore.io.pose_table import PoseTable, write_pose_table
+from tests.app.conftest import wait_jobs
 from tests.app.posing_helpers import open_demo, true_poses
 
 CHAIN_BVH = """HIERARCHY
@@ -47,7 +48,7 @@ def assert_nothing_changed(window, project, count):
     assert window.state.undo_stack.count() == count
 
 
-def test_import_a_pose_from_a_csv_row_and_a_bvh_frame(posed_window, asker, tmp_path):
+def test_import_a_pose_from_a_csv_row_and_a_bvh_frame(qtbot, posed_window, asker, tmp_path):
     window = posed_window
     skeleton = window.state.skeleton
     key2 = window.state.analysis.key_frames[1]
@@ -58,6 +59,7 @@ def test_import_a_pose_from_a_csv_row_and_a_bvh_frame(posed_window, asker, tmp_p
     window.state.set_frame(key2)
     asker.chosen_frame = 41  # frame key2 is not a row: the artist picks row 41
     assert window.posing.import_csv(tmp_path / "p.csv")
+    wait_jobs(qtbot, window)
     np.testing.assert_array_equal(window.state.project.key_poses[key2], wanted[1])
     assert "ignored 1 channel(s)" in window.statusBar().currentMessage()
     assert "tail5" in window.statusBar().currentMessage()
@@ -66,6 +68,7 @@ def test_import_a_pose_from_a_csv_row_and_a_bvh_frame(posed_window, asker, tmp_p
     window.state.set_frame(window.state.analysis.key_frames[2])
     asker.chosen_frame = 0
     assert window.posing.import_bvh(tmp_path / "horse.bvh")
+    wait_jobs(qtbot, window)
     np.testing.assert_allclose(window.state.project.key_poses[window.state.frame], wanted[0], atol=1e-4)
     assert not asker.errors
 
@@ -76,11 +79,17 @@ BAD_FILES = {
     "text.csv": ("frame,root.tx\n0,abc\n", "'abc' is not a number"),
     "broken.bvh": (CHAIN_BVH.replace("  }\n}\nMOTION", "MOTION"), "line"),
     "other_rig.bvh": (CHAIN_BVH, "on joints root, spine1, spine2"),
+    "frames_nan.bvh": (CHAIN_BVH.replace("Frames: 2", "Frames: nan"), "'Frames:' must be"),
+    "huge_cell.csv": ("frame,root.tx\n0," + "1" * 131_073 + "\n", "field larger than"),
+    "deep.bvh": ("HIERARCHY\nROOT j0\n{\nOFFSET 0 0 0\nCHANNELS 1 Zrotation\n"
+                 + "JOINT j\n{\nOFFSET 0 1 0\nCHANNELS 1 Zrotation\n" * 1500 + "}\n" * 1501
+                 + "MOTION\nFrames: 1\nFrame Time: 0.04\n" + "0 " * 1501 + "\n",
+                 "lacks 117 of the 117 channels"),
 }
 
 
 @pytest.mark.parametrize("name", sorted(BAD_FILES))
-def test_a_bad_pose_file_gives_a_message_and_changes_nothing(posed_window, asker, tmp_path, name):
+def test_a_bad_pose_file_gives_a_message_and_changes_nothing(qtbot, posed_window, asker, tmp_path, name):
     window = posed_window
     text, message = BAD_FILES[name]
     path = tmp_path / name
@@ -92,8 +101,8 @@ def test_a_bad_pose_file_gives_a_message_and_changes_nothing(posed_window, asker
         path.write_text(text)
     project, count = window.state.project, window.state.undo_stack.count()
     asker.chosen_frame = 0
-    ok = window.posing.import_bvh(path) if name.endswith(".bvh") else window.posing.import_csv(path)
-    assert not ok
+    window.posing.import_bvh(path) if name.endswith(".bvh") else window.posing.import_csv(path)
+    wait_jobs(qtbot, window)
     assert len(asker.errors) == 1 and message in asker.errors[0], asker.errors
     assert name in asker.errors[0]
     assert_nothing_changed(window, project, count)
@@ -110,17 +119,19 @@ def test_importing_away_from_a_key_only_says_where_to_go(posed_window, asker, tm
     assert_nothing_changed(window, project, count)
 
 
-def test_load_a_rig_from_bvh_asks_before_dropping_poses(posed_window, asker, tmp_path):
+def test_load_a_rig_from_bvh_asks_before_dropping_poses(qtbot, posed_window, asker, tmp_path):
     window = posed_window
     (tmp_path / "chain.bvh").write_text(CHAIN_BVH)
     project, count = window.state.project, window.state.undo_stack.count()
     asker.confirm_answer = False
-    assert not window.posing.load_rig(tmp_path / "chain.bvh")
+    assert window.posing.load_rig(tmp_path / "chain.bvh")
+    wait_jobs(qtbot, window)
     assert "1 pose(s) made so far will be dropped" in asker.asked[-1]
     assert_nothing_changed(window, project, count)
 
     asker.confirm_answer = True
     assert window.posing.load_rig(tmp_path / "chain.bvh")
+    wait_jobs(qtbot, window)
     assert window.state.skeleton.name == "chain" and window.state.project.key_poses == {}
     assert window.posing.missing() == window.posing.frames()
     window.pose_panel.select_joint("shin")
@@ -129,12 +140,13 @@ def test_load_a_rig_from_bvh_asks_before_dropping_poses(posed_window, asker, tmp
     assert window.state.project is project and window.state.skeleton.name == "horse"
 
     (tmp_path / "broken.bvh").write_text("HIERARCHY\nROOT a\n{\n OFFSET 0 0\n")
-    assert not window.posing.load_rig(tmp_path / "broken.bvh")
+    window.posing.load_rig(tmp_path / "broken.bvh")
+    wait_jobs(qtbot, window)
     assert "broken.bvh" in asker.errors[-1]
     assert window.state.project is project
 
 
-def test_a_rig_with_the_same_channels_keeps_the_poses(posed_window, asker, tmp_path):
+def test_a_rig_with_the_same_channels_keeps_the_poses(qtbot, posed_window, asker, tmp_path):
     window = posed_window
     skeleton = window.state.skeleton
     write_bvh(tmp_path / "horse.bvh", skeleton,
@@ -142,6 +154,7 @@ def test_a_rig_with_the_same_channels_keeps_the_poses(posed_window, asker, tmp_p
     poses = dict(window.state.project.key_poses)
     asker.confirm_answer = False  # must not even be asked
     assert window.posing.load_rig(tmp_path / "horse.bvh")
+    wait_jobs(qtbot, window)
     assert window.state.skeleton.name == "horse" and window.state.project.skeleton is not None
     assert window.state.project.key_poses.keys() == poses.keys()
     assert not asker.asked

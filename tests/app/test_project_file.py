@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import os
+import tracemalloc
 
 import numpy as np
 import pytest
@@ -11,6 +13,8 @@ from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.errors import GaitInputError
 from gaitcore.project.document import AnimationOptions, FootageFit, Project, Silhouettes
 from gaitcore.project.storage import (
+    MAX_RECTS,
+    MAX_STROKES,
     VERSION,
     load_project,
     missing_footage,
@@ -230,3 +234,113 @@ def test_trim_and_frame_rate_survive_save_and_reopen_and_older_files_are_untrimm
     doc["version"] = 2  # written before the trim existed: its range cut the footage
     path.write_text(json.dumps(doc))
     assert load_project(path).trim == (0, None)
+
+
+def _saved(tmp_path):
+    path = tmp_path / "p.gaitproj"
+    save_project(make_project(None), path)
+    return path, json.loads(path.read_text())
+
+
+def _npy_header(descr: str, shape: tuple) -> bytes:
+    header = f"{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}"
+    header += " " * (117 - len(header)) + "\n"
+    return b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode()
+
+
+@pytest.mark.parametrize("damage", ["empty", "truncated", "2 PiB", "object", "folder",
+                                    "600 MB header"])
+def test_a_damaged_sidecar_array_is_one_clear_error(tmp_path, damage):
+    path, doc = _saved(tmp_path)
+    f = sidecar_dir(path) / doc["silhouettes"]["arrays"]["centers_xy"]
+    data = f.read_bytes()
+    if damage == "folder":
+        f.unlink()
+        f.mkdir()
+    else:
+        f.write_bytes({"empty": b"", "truncated": data[:-9],
+                       "2 PiB": _npy_header("|u1", (2**51,)) + b"\0" * 64,
+                       "object": _npy_header("|O", (2,)) + b"\0" * 16,
+                       "600 MB header": b"\x93NUMPY\x02\x00" + (600 << 20).to_bytes(4, "little")
+                       + b"{" * 64}[damage])
+    tracemalloc.start()
+    try:
+        with pytest.raises(GaitInputError, match=f.name) as info:
+            load_project(path)
+        assert tracemalloc.get_traced_memory()[1] < 20 << 20, "allocated what the header said"
+    finally:
+        tracemalloc.stop()
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes are POSIX")
+def test_a_pipe_in_the_sidecar_folder_is_refused_without_blocking(tmp_path):
+    path, doc = _saved(tmp_path)
+    f = sidecar_dir(path) / doc["silhouettes"]["arrays"]["lost"]
+    f.unlink()
+    os.mkfifo(f)
+    with pytest.raises(GaitInputError, match="not a regular file"):
+        load_project(path)
+
+
+@pytest.mark.parametrize("field, value, words", [
+    ("footage", 7, "footage must be an object"),
+    ("frame_start", "1e400", "frame_start must be a whole number"),
+    ("fps", "NaN", "fps must be a finite number above 0"),
+    ("fps", -24, "fps must be a finite number above 0"),
+    ("key_poses", [1, 2], "key_poses must be an object"),
+    ("subject_rects", [[0, 0, "9" * 400, 5]], r"subject_rects\[0\]\[2\] must be a whole number"),
+])
+def test_values_that_would_break_the_app_later_are_refused_on_open(tmp_path, field, value, words):
+    path, doc = _saved(tmp_path)
+    text = json.dumps(dict(doc, **{field: "__RAW__"}))
+    raw = value if isinstance(value, str) and value[0] in "1N9" else json.dumps(value)
+    path.write_text(text.replace('"__RAW__"', raw))
+    before = path.read_bytes()
+    with pytest.raises(GaitInputError, match=words):
+        load_project(path)
+    assert path.read_bytes() == before
+
+
+@pytest.mark.parametrize("scale", [0, "NaN", -1])
+def test_a_silhouette_scale_that_is_not_positive_is_refused(tmp_path, scale):
+    path, doc = _saved(tmp_path)
+    doc["silhouettes"]["scale"] = "__RAW__"
+    path.write_text(json.dumps(doc).replace('"__RAW__"', str(scale)))
+    with pytest.raises(GaitInputError, match="silhouettes.scale must be a finite number above 0"):
+        load_project(path)
+
+
+def test_json_nested_100000_deep_is_one_line(tmp_path):
+    path = tmp_path / "deep.gaitproj"
+    path.write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(GaitInputError, match="nests lists or objects too deeply"):
+        load_project(path)
+
+
+def test_too_many_rectangles_are_refused_with_the_limit(tmp_path):
+    path, doc = _saved(tmp_path)
+    doc["subject_rects"] = [[1, 1, 2, 2]] * (MAX_RECTS + 1)
+    path.write_text(json.dumps(doc))
+    with pytest.raises(GaitInputError, match=f"subject_rects must be a list of 0 to {MAX_RECTS}"):
+        load_project(path)
+
+
+def test_temporary_files_of_a_killed_save_are_removed_by_the_next_save(tmp_path):
+    path, doc = _saved(tmp_path)
+    side = sidecar_dir(path)
+    stale = [tmp_path / ".p.gaitproj.4242.tmp",
+             side / f".{doc['silhouettes']['arrays']['lost']}.4242.tmp"]
+    other = tmp_path / ".q.gaitproj.4242.tmp"  # another project's: not ours to delete
+    for f in stale + [other]:
+        f.write_bytes(b"half written")
+    save_project(make_project(None), path)
+    assert not any(f.exists() for f in stale) and other.exists()
+
+
+def test_too_many_strokes_are_refused_with_the_limit(tmp_path):
+    path, doc = _saved(tmp_path)
+    doc["strokes"] = [{"frame": 0, "width_px": 2.0, "points_xy": [[1, 2]]}] * (MAX_STROKES + 1)
+    path.write_text(json.dumps(doc))
+    with pytest.raises(GaitInputError, match=f"strokes must be a list of 0 to {MAX_STROKES}"):
+        load_project(path)

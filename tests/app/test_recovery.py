@@ -86,3 +86,29 @@ def test_declining_recovery_deletes_the_copy(qtbot, make_window, asker, canter_c
     window = make_window(recovery_dir=recovery)
     assert not window.offer_recovery()
     assert find_recovery_copies(recovery) == [] and window.state.n_frames == 0
+
+
+def test_an_empty_autosave_info_file_leaves_the_project_recoverable(qtbot, make_window, asker,
+                                                                    canter_clip, tmp_path):
+    recovery = tmp_path / "recovery"
+    run = subprocess.run([sys.executable, "-c", CRASHING_SESSION, str(recovery),
+                          str(canter_clip / "images"), str(tmp_path / "x.gaitproj")],
+                         cwd=ROOT, env=dict(os.environ, QT_QPA_PLATFORM="offscreen"),
+                         capture_output=True, text=True, timeout=60)
+    assert run.returncode == 3, run.stderr
+    (info,) = recovery.glob("*.json")
+    info.write_text("")  # as a crash while an older version wrote it in place left it
+    copies = find_recovery_copies(recovery)
+    assert len(copies) == 1 and copies[0].original is None
+    assert copies[0].project_file.exists()
+    window = make_window(recovery_dir=recovery)
+    assert window.offer_recovery()
+    wait_ready(qtbot, window)
+    assert window.state.project.subject_rects == (Rect(10, 20, 30, 40),)
+    assert asker.errors == []
+
+
+def test_an_info_file_without_its_project_is_removed(tmp_path):
+    (tmp_path / "session-1-2.json").write_text('{"original": null, "saved_at": 1}')
+    assert find_recovery_copies(tmp_path) == []
+    assert not (tmp_path / "session-1-2.json").exists()

@@ -156,7 +156,7 @@ def test_malformed_analysis_file(tmp_path, capsys):
     (tmp_path / "a.json").write_text("{not json")
     kp = _write_keys(tmp_path / "k.csv", [0], [(0.0, 0.0)])
     assert main(["animate", str(tmp_path / "a.json"), "--key-poses", str(kp), "--out", str(tmp_path / "c.csv")]) == 2
-    assert "not a readable analysis file" in _error_line(capsys)
+    assert "a.json is not valid JSON (line 1, column 2)" in _error_line(capsys)
 
 
 def test_colour_footage_without_rectangles(tmp_path, capsys):

@@ -195,7 +195,7 @@ def test_missing_file_and_template(tmp_path):
     with pytest.raises(GaitInputError, match="not found"):
         Skeleton.from_json(tmp_path / "none.json")
     (tmp_path / "bad.json").write_text("{not json")
-    with pytest.raises(GaitInputError, match="cannot read"):
+    with pytest.raises(GaitInputError, match="bad.json is not valid JSON"):
         Skeleton.from_json(tmp_path / "bad.json")
     with pytest.raises(GaitInputError, match="horse"):
         load_template("unicorn")

@@ -126,7 +126,8 @@ def test_synth_command_writes_the_clip(tmp_path, horse):
     (out / "images").mkdir(parents=True)
     cv2.imwrite(str(out / "images" / "00009.png"), np.zeros((4, 4), np.uint8))  # stale frame
     assert _run(["synth", "--gait", "canter", "--frames", "3", "--out", str(out),
-                 "--width", "96", "--height", "72", "--noise", "0.5", "--seed", "3"]) == 0
+                 "--width", "96", "--height", "72", "--noise", "0.5", "--seed", "3",
+                 "--overwrite"]) == 0
     images = sorted(p.name for p in (out / "images").iterdir())
     assert images == ["00000.png", "00001.png", "00002.png"]
     assert sorted(p.name for p in (out / "masks").iterdir()) == images
@@ -154,3 +155,15 @@ def test_synth_command_rejects_bad_input(tmp_path):
     (tmp_path / "file").write_text("x")
     with pytest.raises(GaitInputError, match="folder"):
         _run(["synth", "--gait", "walk", "--frames", "2", "--out", str(tmp_path / "file")])
+    with pytest.raises(GaitInputError, match="finite"):
+        _run(["synth", "--gait", "walk", "--frames", "2", "--out", str(tmp_path / "n"),
+              "--noise", "nan"])
+
+
+def test_synth_never_writes_into_a_folder_with_files_unless_told(tmp_path):
+    own = tmp_path / "photos" / "00001.png"
+    own.parent.mkdir()
+    own.write_bytes(b"the user's own picture")
+    with pytest.raises(GaitInputError, match="not empty.*--overwrite"):
+        _run(["synth", "--gait", "walk", "--frames", "2", "--out", str(own.parent)])
+    assert own.read_bytes() == b"the user's own picture"

@@ -7,21 +7,19 @@ fixed order (R = Rz Rx Ry, :mod:`gaitcore.rig.skeleton`); root positions are rea
 
 from __future__ import annotations
 
+import math
 import re
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+from gaitcore.io.bvh.hierarchy import Node, parse_hierarchy
 from gaitcore.io.pose_table import PoseTable
 from gaitcore.rig.rotations import axis_matrix, continuous_zxy
 from gaitcore.rig.skeleton import Joint, Skeleton
+from gaitcore.schema import MAX_FPS, read_text
 
-_CHANNEL_KINDS = {
-    "xposition": ("t", "x"), "yposition": ("t", "y"), "zposition": ("t", "z"),
-    "xrotation": ("r", "x"), "yrotation": ("r", "y"), "zrotation": ("r", "z"),
-}
 _OUR_ROTATION_ORDER = "zxy"
 _SIDE_WORDS = (("Left", "Right"), ("left", "right"), ("LEFT", "RIGHT"))
 _SIDE_RULES = (
@@ -30,24 +28,13 @@ _SIDE_RULES = (
     re.compile(r"^()([LlRr])((?:[_\-: ]|[A-Z]).*)$"),
     re.compile(r"^(.*[_\-: ])([LlRr])()$"),
 )
+MAX_BVH_BYTES = 2 << 30
 DEFAULT_BONE_RATIO = 0.12
 """Radius of the ellipsoid drawn for a bone read from a BVH, as a fraction of its length
 (BVH files carry no bone shapes)."""
 TRANSLATION_TOLERANCE = 1e-4
 """A non-root joint may carry position channels (Blender writes them on unconnected bones)
 if they stay within this many file units of their first value: they then become its offset."""
-
-
-@dataclass
-class _Node:
-    """One ROOT, JOINT or End Site as parsed; ``channels`` are (kind, axis, motion column)."""
-
-    name: str
-    parent: int
-    offset: np.ndarray
-    line: int
-    end_site: bool = False
-    channels: list[tuple[str, str, int]] = field(default_factory=list)
 
 
 def read_bvh(path: str | Path, *, scale: float = 1.0,
@@ -98,137 +85,15 @@ def read_bvh(path: str | Path, *, scale: float = 1.0,
     if not scale > 0 or not 0 <= bone_ratio < 10:
         raise GaitInputError(f"read_bvh: scale must be positive and bone_ratio within 0..10, "
                              f"got scale={scale}, bone_ratio={bone_ratio}")
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise GaitInputError(f"BVH file not found: {path}") from None
-    except UnicodeDecodeError:
-        text = path.read_text(encoding="latin-1")
-    except OSError as exc:
-        raise GaitInputError(f"cannot read BVH file {path}: {exc.strerror or exc}") from None
+    text = read_text(path, what="BVH file", max_bytes=MAX_BVH_BYTES, encoding="utf-8-sig",
+                     fallback="latin-1")
     lines = text.splitlines()
-    nodes, n_columns, motion_line = _parse_hierarchy(lines, str(path))
+    del text
+    nodes, n_columns, motion_line = parse_hierarchy(lines, str(path))
     motion, frame_time, digits = _parse_motion(lines, motion_line, n_columns, str(path))
     skeleton, values = _build_skeleton(nodes, motion, scale, bone_ratio, path)
     table = PoseTable(np.arange(len(motion)), skeleton.channel_names, values)
     return skeleton, table, _frame_rate(frame_time, digits)
-
-
-def _parse_hierarchy(lines: list[str], where: str) -> tuple[list[_Node], int, int]:
-    """Nodes (parents first), the number of motion columns and the index of the MOTION line."""
-    tokens = [(tok, i + 1) for i, line in enumerate(lines)
-              for tok in re.findall(r"[{}]|[^\s{}]+", line)]
-    motion_at = next((k for k, (t, _) in enumerate(tokens) if t.upper() == "MOTION"), len(tokens))
-    toks, pos = tokens[:motion_at], 0
-    nodes: list[_Node] = []
-    n_columns = 0
-
-    def fail(line: int, message: str) -> GaitInputError:
-        return GaitInputError(f"{where}, line {line}: {message}")
-
-    def peek() -> tuple[str, int]:
-        return toks[pos] if pos < len(toks) else ("", lines_end)
-
-    def numbers(count: int, what: str, line: int) -> np.ndarray:
-        nonlocal pos
-        got = toks[pos:pos + count]
-        try:
-            if len(got) < count or any(ln != line for _, ln in got):
-                raise ValueError
-            vals = np.array([float(t) for t, _ in got])
-        except ValueError:
-            raise fail(line, f"{what} needs {count} numbers on its line") from None
-        if not np.all(np.isfinite(vals)):
-            raise fail(line, f"{what} has a value that is not a finite number")
-        pos += count
-        return vals
-
-    def joint(parent: int, line: int, end_site: bool) -> None:
-        nonlocal pos, n_columns
-        rest = [t for t, ln in toks[pos:] if ln == line]
-        name_tokens = rest[:-1] if rest and rest[-1] == "{" else rest
-        pos += len(name_tokens)
-        if end_site:
-            name_tokens = []  # "End Site" sometimes has a name after it; ignore it
-        elif not name_tokens:
-            raise fail(line, "ROOT/JOINT needs a name")
-        kind = "End Site" if end_site else "joint " + repr(" ".join(name_tokens))
-        if peek()[0] != "{":
-            raise fail(peek()[1], f"{kind} (line {line}) must be followed by '{{'")
-        pos += 1
-        me = len(nodes)
-        nodes.append(_Node(" ".join(name_tokens), parent, np.zeros(3), line, end_site))
-        seen_offset = seen_channels = False
-        while True:
-            tok, ln = peek()
-            word = tok.upper()
-            if word in ("JOINT", "END", "}") and not seen_offset:
-                raise fail(ln, f"{kind} (line {line}) has no OFFSET; add 'OFFSET x y z'")
-            if word in ("JOINT", "END", "}") and not seen_channels and not end_site:
-                raise fail(ln, f"{kind} (line {line}) has no CHANNELS; add e.g. "
-                               "'CHANNELS 3 Zrotation Xrotation Yrotation'")
-            if word == "OFFSET":
-                pos += 1
-                nodes[me].offset = numbers(3, "OFFSET", ln)
-                seen_offset = True
-            elif word == "CHANNELS" and not end_site:
-                pos += 1
-                count = numbers(1, "CHANNELS", ln)[0]
-                if count != int(count) or not 0 <= count <= 6:
-                    raise fail(ln, f"CHANNELS count must be a whole number 0..6, got {count:g}")
-                names = [t for t, l2 in toks[pos:pos + int(count)] if l2 == ln]
-                if len(names) != count:
-                    raise fail(ln, f"CHANNELS says {int(count)} but lists {len(names)} on its line")
-                pos += len(names)
-                for ch in names:
-                    if ch.lower() not in _CHANNEL_KINDS:
-                        raise fail(ln, f"unknown channel {ch!r} in {kind}; BVH channels are "
-                                       "Xposition Yposition Zposition Xrotation Yrotation Zrotation")
-                    k, axis = _CHANNEL_KINDS[ch.lower()]
-                    if any(c[:2] == (k, axis) for c in nodes[me].channels):
-                        raise fail(ln, f"channel {ch!r} is listed twice in {kind}")
-                    nodes[me].channels.append((k, axis, n_columns))
-                    n_columns += 1
-                seen_channels = True
-            elif word == "JOINT" and not end_site:
-                pos += 1
-                joint(me, ln, False)
-            elif word == "END" and not end_site:
-                if pos + 1 >= len(toks) or toks[pos + 1][0].upper() != "SITE":
-                    raise fail(ln, "expected 'End Site'")
-                pos += 2
-                joint(me, ln, True)
-            elif tok == "}":
-                pos += 1
-                return
-            elif tok == "":
-                raise fail(ln, f"unbalanced braces: {kind} opened at line {line} is never "
-                               "closed; add the missing '}'")
-            else:
-                raise fail(ln, f"unexpected {tok!r} in {kind}; expected OFFSET, CHANNELS, "
-                               "JOINT, End Site or '}'")
-
-    lines_end = tokens[motion_at][1] if motion_at < len(tokens) else len(lines)
-    if not toks or toks[0][0].upper() != "HIERARCHY":
-        raise fail(toks[0][1] if toks else 1, "a BVH file starts with HIERARCHY; is this a BVH file?")
-    pos = 1
-    tok, ln = peek()
-    if tok.upper() != "ROOT":
-        if tok.upper() == "JOINT":
-            raise fail(ln, "JOINT outside a ROOT; the hierarchy must start with 'ROOT <name>'")
-        raise fail(ln, f"expected 'ROOT <name>' after HIERARCHY, found {tok or 'nothing'!r}")
-    pos += 1
-    joint(-1, ln, False)
-    tok, ln = peek()
-    if tok:
-        what = {"ROOT": "a second ROOT; only one skeleton per file is supported",
-                "JOINT": "JOINT outside the ROOT's braces",
-                "}": "unbalanced braces: one '}' too many"}.get(tok.upper(), f"unexpected {tok!r}")
-        raise fail(ln, f"{what} (after the ROOT closed)")
-    if motion_at == len(tokens):
-        raise fail(len(lines), "no MOTION section; a BVH file ends with MOTION, Frames: "
-                               "and Frame Time: lines followed by one line per frame")
-    return nodes, n_columns, tokens[motion_at][1] - 1
 
 
 def _parse_motion(lines: list[str], motion_line: int, n_columns: int,
@@ -258,11 +123,11 @@ def _parse_motion(lines: list[str], motion_line: int, n_columns: int,
             raise GaitInputError(f"{where}, line {number}: expected '{expected}', "
                                  f"found {text.strip()[:40]!r}")
     frames, frame_time = header["frames"], header["time"]
-    if frames != int(frames) or frames < 0:
+    if not (np.isfinite(frames) and frames == int(frames) and frames >= 0):
         raise GaitInputError(f"{where}: 'Frames:' must be a whole number, got {frames:g}")
-    if not (np.isfinite(frame_time) and frame_time > 0):
-        raise GaitInputError(f"{where}: 'Frame Time:' must be a positive number of seconds, "
-                             f"got {frame_time:g}")
+    if not (np.isfinite(frame_time) and frame_time >= 1.0 / MAX_FPS):
+        raise GaitInputError(f"{where}: 'Frame Time:' must be a positive number of seconds "
+                             f"(at most {MAX_FPS:g} frames per second), got {frame_time:g}")
     if len(rows) != frames:
         raise GaitInputError(
             f"{where}: 'Frames: {int(frames)}' but the file has {len(rows)} motion line(s); "
@@ -306,7 +171,7 @@ def _is_number(text: str) -> bool:
     return True
 
 
-def _build_skeleton(nodes: list[_Node], motion: np.ndarray, scale: float, bone_ratio: float,
+def _build_skeleton(nodes: list[Node], motion: np.ndarray, scale: float, bone_ratio: float,
                     path: Path) -> tuple[Skeleton, np.ndarray]:
     names = _joint_names(nodes)
     converted = [_joint_motion(node, name, motion, scale, path) for node, name in zip(nodes, names)]
@@ -314,26 +179,34 @@ def _build_skeleton(nodes: list[_Node], motion: np.ndarray, scale: float, bone_r
     joints = []
     for node, name, (offset, channels, _) in zip(nodes, names, converted):
         parent = None if node.parent < 0 else names[node.parent]
-        length = float(np.linalg.norm(offset))
+        length = math.hypot(*offset)
         radii = None
         if parent is not None and length > 1e-9 and bone_ratio > 0:
             radii = (bone_ratio * length, bone_ratio * length)
         side, mirror = sides.get(name, ("C", None))
-        joints.append(Joint(name, parent, tuple(float(v) for v in offset), channels,
+        joints.append(Joint(name, parent, tuple(offset.tolist()), channels,
                             side=side, mirror=mirror, bone_radii=radii, bone_color=(0.6, 0.6, 0.6)))
     columns = [col for _, _, cols in converted for col in cols]
-    values = np.column_stack(columns) if columns else np.zeros((len(motion), 0))
+    values = np.empty((len(motion), len(columns)))
+    direct = [(k, col) for k, col in enumerate(columns) if isinstance(col, int)]
+    if direct:  # channels kept as they are: one gather instead of a column each
+        targets, sources = zip(*direct)
+        values[:, list(targets)] = motion[:, list(sources)]
+    for k, col in enumerate(columns):
+        if not isinstance(col, int):
+            values[:, k] = col
     return Skeleton(name=path.stem, joints=tuple(joints)), values
 
 
-def _joint_motion(node: _Node, name: str, motion: np.ndarray, scale: float,
-                  path: Path) -> tuple[np.ndarray, tuple[str, ...], list[np.ndarray]]:
-    """Offset (metres), our channels and their curves for one BVH joint."""
+def _joint_motion(node: Node, name: str, motion: np.ndarray, scale: float,
+                  path: Path) -> tuple[np.ndarray, tuple[str, ...], list[np.ndarray | int]]:
+    """Offset (metres), our channels and their curves for one BVH joint (a curve is a
+    column of ``motion`` when the channel is kept as it is)."""
     offset = node.offset * scale
     trans = [(a, col) for k, a, col in node.channels if k == "t"]
     rot = [(a, col) for k, a, col in node.channels if k == "r"]
     channels: list[str] = []
-    columns: list[np.ndarray] = []
+    columns: list[np.ndarray | int] = []
     if trans and node.parent < 0:
         for a, col in sorted(trans, key=lambda ac: "xyz".index(ac[0])):
             channels.append("t" + a)
@@ -352,7 +225,7 @@ def _joint_motion(node: _Node, name: str, motion: np.ndarray, scale: float,
     axes = "".join(a for a, _ in rot)
     if rot and _is_subsequence(axes, _OUR_ROTATION_ORDER):
         channels += ["r" + a for a in axes]
-        columns += [motion[:, col] for _, col in rot]
+        columns += [col for _, col in rot]
     elif rot:
         matrices = np.broadcast_to(np.eye(3), (len(motion), 3, 3))
         for a, col in rot:
@@ -362,7 +235,7 @@ def _joint_motion(node: _Node, name: str, motion: np.ndarray, scale: float,
     return offset, tuple(channels), columns
 
 
-def _joint_names(nodes: list[_Node]) -> list[str]:
+def _joint_names(nodes: list[Node]) -> list[str]:
     """Unique names without dots: ours use '<joint>.<channel>' for channel names."""
     names: list[str] = []
     taken: set[str] = set()

@@ -1,0 +1,127 @@
+"""The command on hostile input: every failure is exit status 2 and one line (issue #15).
+
+The first eleven cases are the command lines that ended in a traceback before: rectangles
+of infinite size, a negative seed, analysis files with a wrong-typed version, an infinite
+frame count or deep nesting, a CSV cell over the csv module's limit, and BVH skeletons with
+``Frames: inf``/``nan`` or more than a thousand nested joints.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gaitcore.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+ANALYSIS = {"format": "gaitstudio-analysis", "version": 1, "n_frames": 6, "alpha": 0.69,
+            "key_frames": [1, 4], "projections": [[0.1 * i, 0.01 * i * i - 0.2 * i] for i in range(6)],
+            "loop_angle": [0.1 * i for i in range(6)]}
+
+
+def bvh(n_joints: int, *, frames: str = "1", nested: bool = False) -> str:
+    """A rig of ``n_joints`` (a chain when ``nested``, else all children of the root)."""
+    lines = ["HIERARCHY", "ROOT j0", "{", "OFFSET 0 0 0",
+             "CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation"]
+    for i in range(1, n_joints):
+        lines += [f"JOINT j{i}", "{", "OFFSET 0 1 0", "CHANNELS 3 Zrotation Xrotation Yrotation"]
+        lines += [] if nested else ["}"]
+    lines += ["}"] * (n_joints if nested else 1)
+    lines += ["MOTION", f"Frames: {frames}", "Frame Time: 0.04", " ".join(["0"] * (3 * n_joints + 3))]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.fixture
+def files(tmp_path):
+    def write(name: str, text: str) -> str:
+        (tmp_path / name).write_text(text)
+        return str(tmp_path / name)
+
+    good = json.dumps(ANALYSIS)
+    (tmp_path / "masks").mkdir()
+    return {
+        "dir": str(tmp_path), "masks": str(tmp_path / "masks"), "out": str(tmp_path / "c.csv"),
+        "analysis": write("a.json", good),
+        "keys": write("k.csv", "frame,j0.rz\n1,0\n4,1\n"),
+        "v_str": write("v_str.json", json.dumps(dict(ANALYSIS, version="1"))),
+        "v_null": write("v_null.json", json.dumps(dict(ANALYSIS, version=None))),
+        "n_inf": write("n_inf.json", good.replace('"n_frames": 6', '"n_frames": 1e400')),
+        "deep": write("deep.json", "[" * 100_000 + "]" * 100_000),
+        "big_cell": write("big.csv", "frame,j0.rz\n1," + "1" * 131_073 + "\n4,1\n"),
+        "frames_inf": write("inf.bvh", bvh(3, frames="inf")),
+        "frames_nan": write("nan.bvh", bvh(3, frames="nan")),
+        "nested": write("nested.bvh", bvh(1_200, nested=True)),
+    }
+
+
+def _animate(f, analysis="analysis", keys="keys", *extra):
+    return ["animate", f[analysis], "--key-poses", f[keys], "--out", f["out"], *extra]
+
+
+def _skeleton(f, name):
+    return _animate(f, "analysis", "keys", "--bvh", f["dir"] + "/o.bvh", "--skeleton", f[name])
+
+
+CASES = {
+    "subject inf": lambda f: ["analyze", f["masks"], "--out", f["dir"], "--subject", "inf,0,10,10"],
+    "subject 1e400": lambda f: ["analyze", f["masks"], "--out", f["dir"], "--subject", "1e400,0,9,9"],
+    "synth seed -1": lambda f: ["synth", "--gait", "walk", "--frames", "2", "--out",
+                                f["dir"] + "/s", "--noise", "1", "--seed", "-1"],
+    "version string": lambda f: _animate(f, "v_str"),
+    "version null": lambda f: _animate(f, "v_null"),
+    "n_frames 1e400": lambda f: _animate(f, "n_inf"),
+    "deep analysis": lambda f: _animate(f, "deep"),
+    "CSV cell > 131072": lambda f: _animate(f, "analysis", "big_cell"),
+    "BVH Frames: inf": lambda f: _skeleton(f, "frames_inf"),
+    "BVH Frames: nan": lambda f: _skeleton(f, "frames_nan"),
+    "BVH 1200 nested joints": lambda f: _skeleton(f, "nested"),
+    "fps 1e300": lambda f: _animate(f, "analysis", "keys", "--fps", "1e300"),
+}
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_bad_input_exits_2_with_one_line(files, case, capsys):
+    assert main(CASES[case](files)) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("gaitcore: error: ")
+    assert "Traceback" not in err and "unexpected" not in err
+
+
+def test_negative_rectangles_need_no_equals_sign(files, capsys):
+    assert main(["analyze", files["masks"], "--out", files["dir"], "--subject", "-10,-10,50,50"]) == 2
+    assert "is empty" in capsys.readouterr().err  # parsed: the empty folder is the problem
+
+
+def test_an_unexpected_error_is_still_one_line(monkeypatch, capsys):
+    import gaitcore.bench.evaluate
+
+    def broken(*args, **kwargs):
+        raise ZeroDivisionError("a bug\nover two lines")
+
+    monkeypatch.setattr(gaitcore.bench.evaluate, "evaluate_gait", broken)
+    assert main(["evaluate", "--gait", "walk"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "ZeroDivisionError (a bug over two lines)" in err
+
+
+def test_a_damaged_video_prints_one_line_not_the_decoder_log(shared_data, tmp_path):
+    video = shared_data / "muybridge-race-horse" / "race_horse_loop.mp4"
+    data = np.frombuffer(video.read_bytes(), np.uint8).copy()
+    rng = np.random.default_rng(1)
+    spots = rng.integers(len(data) // 10, len(data), 3000)
+    data[spots] = rng.integers(0, 256, len(spots), dtype=np.uint8)  # as a bad disk or download
+    (tmp_path / "damaged.mp4").write_bytes(data.tobytes())
+    run = subprocess.run([sys.executable, "-m", "gaitcore.cli", "analyze", str(tmp_path / "damaged.mp4"),
+                          "--out", str(tmp_path / "out"), "--subject", "10,10,50,50",
+                          "--background", "0,0,5,5"],
+                         cwd=ROOT, capture_output=True, text=True, timeout=300,
+                         env={k: v for k, v in os.environ.items() if not k.startswith("OPENCV_")})
+    assert run.returncode == 2
+    assert len(run.stderr.splitlines()) == 1, run.stderr[:500]

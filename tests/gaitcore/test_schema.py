@@ -1,0 +1,99 @@
+"""The checked reading helpers every file reader uses (gaitcore.schema)."""
+
+from __future__ import annotations
+
+import doctest
+import os
+
+import numpy as np
+import pytest
+
+import gaitcore.schema
+from gaitcore.errors import GaitInputError
+from gaitcore.schema import parse_json, read_npy, read_text
+
+
+def test_the_module_examples_hold():
+    assert doctest.testmod(gaitcore.schema).failed == 0
+
+
+def doc(text: str):
+    return parse_json(text, what="file f", advice="fix it")
+
+
+@pytest.mark.parametrize("text, read, message", [
+    ('{"a": {"b": [1, 2, "x"]}}', lambda d: d.key("a").key("b").array(),
+     r"file f: a\.b\[2\] must be a finite number, got \"x\"; fix it"),
+    ('{"a": [[1, 2], [3, 1e400]]}', lambda d: d.key("a").array(columns=2),
+     r"a\[1\]\[1\] must be a finite number, got inf"),
+    ('{"a": [[1, 2], [3]]}', lambda d: d.key("a").array(columns=2),
+     r"a\[1\] must be a list of 2 elements, got a list of 1 element"),
+    ('{"a": 9' + "9" * 400 + "}", lambda d: d.key("a").integer(lo=0, hi=10),
+     "a must be a whole number from 0 to 10, got an integer of 401 digits"),
+    ('{"a": true}', lambda d: d.key("a").number(), "a must be a finite number, got true"),
+    ('{"a": NaN}', lambda d: d.key("a").number(lo=0, hi=1), "from 0 to 1, got nan"),
+    ('{"a": 0}', lambda d: d.key("a").number(lo=0, lo_open=True), "above 0, got 0"),
+    ('{"a": 2.5}', lambda d: d.key("a").integer(lo=0, hi=9), "whole number"),
+    ('{"a": "x"}', lambda d: d.key("a").text(choices=("y", "z")), "one of 'y', 'z'"),
+    ('{}', lambda d: d.key("a"), "file f: a is missing; fix it"),
+    ('[1]', lambda d: d.key("a"), "the document must be an object, got a list of 1"),
+    ('{"a": [1, 2, 3]}', lambda d: d.key("a").items(max_len=2), "a list of 0 to 2 elements"),
+    ('{"a": [1, 2e400]}', lambda d: d.key("a").floats(length=2), r"a\[1\] must be a finite"),
+])
+def test_a_bad_value_is_named_by_its_path(text, read, message):
+    with pytest.raises(GaitInputError, match=message):
+        read(doc(text))
+
+
+def test_good_values_come_back_as_plain_python_and_arrays():
+    d = doc('{"n": 3.0, "m": null, "xy": [[1, 2.5], [3, 4]], "s": "ok", "f": [1, 2]}')
+    assert d.key("n").integer(lo=0, hi=5) == 3 and d.key("m").number(optional=True) is None
+    np.testing.assert_array_equal(d.key("xy").array(columns=2), [[1, 2.5], [3, 4]])
+    assert d.key("s").text() == "ok" and d.key("f").floats(length=2) == (1.0, 2.0)
+    assert d.key("missing", 7).integer(lo=0, hi=9) == 7
+
+
+@pytest.mark.parametrize("text, words", [
+    ("{", r"is not valid JSON \(line 1, column 2\); fix it"),
+    ("[" * 100_000 + "]" * 100_000, "nests lists or objects too deeply"),
+    ("1" * 5000, "integer of thousands of digits"),
+])
+def test_unparsable_json_is_one_line(text, words):
+    with pytest.raises(GaitInputError, match=words) as info:
+        doc(text)
+    assert "\n" not in str(info.value)
+
+
+def test_read_text_refuses_folders_big_files_and_bad_bytes(tmp_path):
+    with pytest.raises(GaitInputError, match="is a folder"):
+        read_text(tmp_path, what="pose file", max_bytes=100)
+    (tmp_path / "big.txt").write_text("x" * 101)
+    with pytest.raises(GaitInputError, match="MiB such a file can hold"):
+        read_text(tmp_path / "big.txt", what="pose file", max_bytes=100)
+    (tmp_path / "latin.txt").write_bytes(b"caf\xe9")
+    with pytest.raises(GaitInputError, match="is not utf-8 text"):
+        read_text(tmp_path / "latin.txt", what="pose file", max_bytes=100)
+    assert read_text(tmp_path / "latin.txt", what="x", max_bytes=100, fallback="latin-1") == "café"
+    with pytest.raises(GaitInputError, match="pose file not found"):
+        read_text(tmp_path / "none.txt", what="pose file", max_bytes=100)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes are POSIX")
+def test_read_text_refuses_a_pipe_without_blocking(tmp_path):
+    os.mkfifo(tmp_path / "pipe")
+    with pytest.raises(GaitInputError, match="not a regular file"):
+        read_text(tmp_path / "pipe", what="project file", max_bytes=100)
+
+
+def test_read_npy_checks_the_header_against_the_file(tmp_path):
+    f = tmp_path / "a.npy"
+    np.save(f, np.arange(6.0).reshape(3, 2))
+    np.testing.assert_array_equal(read_npy(f, what="array", kind="f", ndim=2, max_bytes=1000),
+                                  np.arange(6.0).reshape(3, 2))
+    with pytest.raises(GaitInputError, match="holds a 2-D float64 array"):
+        read_npy(f, what="array", kind="b", ndim=2, max_bytes=1000)
+    with pytest.raises(GaitInputError, match="declares shape"):
+        read_npy(f, what="array", kind="f", ndim=2, max_bytes=10)
+    f.write_bytes(f.read_bytes()[:-1])
+    with pytest.raises(GaitInputError, match=r"declares shape \(3, 2\) \(48 bytes\) but it holds 47"):
+        read_npy(f, what="array", kind="f", ndim=2, max_bytes=1000)
