@@ -116,8 +116,8 @@ class MainWindow(QMainWindow):
         self.state.sourceChanged.connect(self._update_title)
         self.documents.recentChanged.connect(self._fill_recent)
         self.resize(1500, 950)
-        self.resizeDocks([self.docks["posing"], self.docks["pcs"]], [300, 380], Qt.Orientation.Horizontal)
-        self.views.setSizes([500, 500])
+        self.resizeDocks([self.docks["posing"], self.docks["pcs"]], [280, 330], Qt.Orientation.Horizontal)
+        self.views.setSizes([380, 620])  # the rig over the footage gets the larger pane
         self.resizeDocks([self.docks["timeline"], self.docks["animation"]], [70, 170], Qt.Orientation.Vertical)
         self.resizeDocks([self.docks["pcs"], self.docks["diagnosis"]], [360, 300], Qt.Orientation.Vertical)
         if remember_layout:

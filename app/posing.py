@@ -23,7 +23,7 @@ from gaitcore.errors import GaitInputError
 from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.pose_table import PoseTable, joints_of, map_channels, read_pose_table
 from gaitcore.project.steps import alternates_in_use, frames_to_pose, missing_poses, read_rig
-from gaitcore.rig.posing import turn_joint
+from gaitcore.rig.posing import drag_end, effector_chain_top, turn_joint
 from gaitcore.rig.skeleton import Skeleton
 
 
@@ -102,6 +102,21 @@ class PosingController(QObject):
             return
         name = skeleton.joints[joint].name
         self._push(frame, pose, f"rotate {name} on frame {frame}", ("drag", frame, name, self._drag_id))
+
+    def is_draggable_end(self, joint: int) -> bool:
+        """True when dragging ``joint`` moves it by IK (a toe, the head's end, the tail's tip)."""
+        return effector_chain_top(self._state.skeleton, joint) is not None
+
+    def drag_end(self, joint: int, base_pose: np.ndarray, target_xyz: np.ndarray) -> None:
+        """Set the current key's pose to ``base_pose`` with end ``joint`` moved to ``target_xyz``
+        by IK on the chain above it (leg, neck or tail), within the joint limits."""
+        frame = self._require_frame()
+        skeleton = self._state.skeleton
+        pose = drag_end(skeleton, base_pose, joint, target_xyz)
+        if frame is None or pose is None:
+            return
+        name = skeleton.joints[joint].name
+        self._push(frame, pose, f"move {name} on frame {frame}", ("drag", frame, name, self._drag_id))
 
     def set_pose(self, pose: np.ndarray, text: str) -> bool:
         """Replace the current key's whole pose (clamped to the joint limits)."""

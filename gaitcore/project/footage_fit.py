@@ -89,10 +89,14 @@ class ReferenceImage:
         Indexed (x, y) with y up, as GLImageItem wants it.
     transform : ndarray of shape (4, 4)
         Texel -> gaitcore world (metres).
+    pixel_to_world : ndarray of shape (3, 4)
+        Source pixel (u, v, 1) -> gaitcore world (x, y, z) on the plane, metres, to draw
+        anything measured on the frame (the silhouette's outline) over the footage.
     """
 
     rgba_xy: np.ndarray
     transform: np.ndarray
+    pixel_to_world: np.ndarray
 
 
 def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
@@ -155,4 +159,25 @@ def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
         [0, 0, 1, -(skeleton.depth_m + PLANE_GAP_M)],
         [0, 0, 0, 1.0],
     ])
-    return ReferenceImage(data, transform)
+    pixel_to_world = np.array([[sign * s, 0, X0 - sign * u0 * s],
+                               [0, -s, Y0 + v0 * s],
+                               [0, 0, transform[2, 3]]])
+    return ReferenceImage(data, transform, pixel_to_world)
+
+
+def silhouette_outline_px(silhouettes: Silhouettes, frame: int) -> list[np.ndarray]:
+    """Outlines of the silhouette of ``frame`` in source pixels, [] where it is lost.
+
+    Returns
+    -------
+    list of ndarray of shape (n, 2)
+        One closed polyline (x, y) per outer boundary of the mask, first point not repeated.
+    """
+    window = silhouettes.window_xywh(frame) if 0 <= frame < silhouettes.n_frames else None
+    if window is None:
+        return []
+    mask = np.ascontiguousarray(silhouettes.roi.crops[frame], dtype=np.uint8)
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    scale = silhouettes.roi.scale
+    return [np.asarray(window[:2]) + (c[:, 0, :].astype(float) + 0.5) / scale
+            for c in contours if len(c) >= 3]
