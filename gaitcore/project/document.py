@@ -23,6 +23,7 @@ import numpy as np
 
 from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.errors import GaitInputError
+from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
 from gaitcore.silhouettes.annotations import Rect, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
@@ -176,6 +177,9 @@ class Project:
         How the preview and the exports animate the keys.
     footage_fit : FootageFit
         How the footage sits behind the skeleton while posing.
+    proportions : RigProportions
+        Per-part length scales of the rig (legs, neck, body, head, tail): the rig is posed
+        and exported in these proportions (:func:`gaitcore.rig.proportions.proportioned`).
     """
 
     footage: Path | None = None
@@ -192,6 +196,7 @@ class Project:
     skeleton: Skeleton | None = None
     animation: AnimationOptions = field(default_factory=AnimationOptions)
     footage_fit: FootageFit = field(default_factory=FootageFit)
+    proportions: RigProportions = field(default_factory=RigProportions)
 
     def __post_init__(self) -> None:
         if self.footage is not None:

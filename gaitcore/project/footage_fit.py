@@ -7,6 +7,10 @@ centre, paper Section 2.2) lands on the skeleton's centre (area-weighted centre 
 ellipsoids seen from the side); the project's :class:`~gaitcore.project.document.FootageFit` corrects
 that placement (scale about the anchor, shift, mirror). Only the part of the frame around the subject is uploaded,
 shrunk to at most :data:`MAX_TEXTURE_SIDE` pixels.
+
+:func:`fit_rig` does both fits from the key-image's silhouette: the rig's proportions
+(:mod:`gaitcore.rig.silhouette_fit`) and the footage's size and place that put the
+silhouette on the proportioned rig.
 """
 
 from __future__ import annotations
@@ -16,7 +20,11 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from gaitcore.errors import GaitInputError
+from gaitcore.progress import Progress
 from gaitcore.project.document import FootageFit, Silhouettes
+from gaitcore.rig.proportions import RigProportions, proportioned
+from gaitcore.rig.silhouette_fit import ProportionsFit, fit_proportions
 from gaitcore.rig.skeleton import Skeleton
 
 MAX_TEXTURE_SIDE = 512
@@ -181,3 +189,69 @@ def silhouette_outline_px(silhouettes: Silhouettes, frame: int) -> list[np.ndarr
     scale = silhouettes.roi.scale
     return [np.asarray(window[:2]) + (c[:, 0, :].astype(float) + 0.5) / scale
             for c in contours if len(c) >= 3]
+
+
+@dataclass(frozen=True)
+class RigFit:
+    """The rig and the footage fitted to one key-image's silhouette.
+
+    Attributes
+    ----------
+    proportions : RigProportions
+    footage_fit : FootageFit
+        Puts the silhouette on the rig in those proportions, in the viewport's placement.
+    measures : ProportionsFit
+        Overlap and the fitted rig's body length, height at the withers and leg length.
+    """
+
+    proportions: RigProportions
+    footage_fit: FootageFit
+    measures: ProportionsFit
+
+
+def fit_rig(template: Skeleton, pose: np.ndarray, silhouettes: Silhouettes, frame: int, *,
+            start: RigProportions = RigProportions(), flip: bool = False,
+            progress: Progress | None = None) -> RigFit:
+    """Fit the rig's part scales and the footage's placement to the silhouette of ``frame``.
+
+    Parameters
+    ----------
+    template : Skeleton
+        The rig before proportions.
+    pose : ndarray of shape (k,)
+        Its pose on ``frame`` (the key's pose, or the rest pose).
+    silhouettes : Silhouettes
+    frame : int
+    start : RigProportions
+        The proportions the search starts from (the body scale is kept: the reference).
+    flip : bool
+        The animal moves to the left in the clip (the footage is mirrored).
+    progress : callable(done, total) -> bool, optional
+
+    Raises
+    ------
+    GaitInputError
+        ``frame`` has no silhouette.
+    """
+    window = silhouettes.window_xywh(frame) if 0 <= frame < silhouettes.n_frames else None
+    height_px = silhouette_height_px(silhouettes)
+    if window is None or not height_px:
+        raise GaitInputError(f"frame {frame} has no silhouette: segment or sketch it, or fit "
+                             "the rig on another key")
+    crop = silhouettes.roi.crops[frame]
+    fit = fit_proportions(crop[:, ::-1] if flip else crop, template, pose, start=start,
+                          progress=progress)
+    rig = proportioned(template, fit.proportions)
+    extent = skeleton_extent(rig)
+    k = silhouettes.roi.scale
+    cx, cy = silhouettes.roi.centers_xy[frame]
+    col, row = (cx - window[0]) * k - 0.5, (cy - window[1]) * k - 0.5  # the anchor in the crop
+    if flip:
+        col = crop.shape[1] - 1 - col
+    anchor = np.array([col - fit.origin_px[0], fit.origin_px[1] - row]) * fit.metres_per_px
+    lift = rig.offsets[0, 1] - template.offsets[0, 1]  # the fit posed the template's root
+    follow = rig.joint_positions(pose)[0, 0] - rig.offsets[0, 0]  # the viewport follows the root
+    footage = FootageFit(scale=fit.metres_per_px * k * height_px / extent.height_m,
+                         offset_x_m=float(anchor[0] - extent.center_xy[0] - follow),
+                         offset_y_m=float(anchor[1] + lift - extent.center_xy[1]), flip=flip)
+    return RigFit(fit.proportions, footage, fit)

@@ -27,6 +27,7 @@ import numpy as np
 from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.errors import GaitInputError
 from gaitcore.project.document import AnimationOptions, FootageFit, Project, Silhouettes
+from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
 from gaitcore.silhouettes.annotations import Rect, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
@@ -150,6 +151,7 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
         "silhouettes": sil,
         "animation": asdict(project.animation),
         "footage_fit": asdict(project.footage_fit),
+        "proportions": asdict(project.proportions),
     }
 
 
@@ -183,6 +185,7 @@ def _from_json(doc: dict, p: Path) -> Project:
         skeleton=None if doc.get("skeleton") is None else Skeleton.from_json(doc["skeleton"]),
         animation=_options(AnimationOptions, doc.get("animation", {}), "animation options"),
         footage_fit=_options(FootageFit, doc.get("footage_fit", {}), "footage fit"),
+        proportions=_options(RigProportions, doc.get("proportions", {}), "rig proportions"),
     )
 
 

@@ -10,6 +10,7 @@ import pytest
 from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.errors import GaitInputError
 from gaitcore.project.document import AnimationOptions, FootageFit, Project, Silhouettes
+from gaitcore.rig.proportions import RigProportions
 from gaitcore.project.storage import (
     VERSION,
     load_project,
@@ -36,6 +37,7 @@ def make_project(footage) -> Project:
         silhouettes=Silhouettes(roi, "segmented"),
         animation=AnimationOptions(filtered=True, loop=True),
         footage_fit=FootageFit(scale=1.25, offset_x_m=-0.1, offset_y_m=0.05, flip=True),
+        proportions=RigProportions(legs=1.15, neck=0.85, tail=0.9),
     )
 
 
@@ -201,4 +203,17 @@ def test_a_bad_footage_fit_is_a_damaged_file(tmp_path, entry):
     doc["footage_fit"] = entry
     (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
     with pytest.raises(GaitInputError, match="is damaged"):
+        load_project(tmp_path / "p.gaitproj")
+
+
+def test_rig_proportions_default_for_older_files_and_are_checked(tmp_path):
+    save_project(Project(proportions=RigProportions(legs=1.1)), tmp_path / "p.gaitproj")
+    doc = json.loads((tmp_path / "p.gaitproj").read_text())
+    assert doc["proportions"]["legs"] == 1.1
+    del doc["proportions"]  # saved before proportions existed
+    (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
+    assert load_project(tmp_path / "p.gaitproj").proportions == RigProportions()
+    doc["proportions"] = {"neck": 0.0}
+    (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
+    with pytest.raises(GaitInputError, match="damaged"):
         load_project(tmp_path / "p.gaitproj")
