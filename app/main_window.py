@@ -72,7 +72,7 @@ class MainWindow(QMainWindow):
         self.documents = DocumentController(self.state, self.asker, self.runner, self.autosaver, self)
         self.analysis = AnalysisController(self.state, self.runner, self)
         self.player = Player(self.state, self)
-        self.posing = PosingController(self.state, self.asker, self)
+        self.posing = PosingController(self.state, self.asker, self, run=self.documents.run)
         self.animator = AnimationController(self.state, self)
         self.exporter = ExportController(self.state, self.animator, self.documents, self)
 

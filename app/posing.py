@@ -10,6 +10,7 @@ An import that fails changes nothing and says why.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from itertools import count
 from pathlib import Path
 
@@ -17,11 +18,13 @@ import numpy as np
 from PySide6.QtCore import QObject, Signal
 
 from app.dialogs import Asker
-from app.pose_commands import SetPoseCommand, SetSkeletonCommand
+from app.pose_commands import FitRigCommand, ProportionsCommand, SetPoseCommand, SetSkeletonCommand
 from app.state import AppState
+from app.workers import Job
 from gaitcore.errors import GaitInputError
 from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.pose_table import PoseTable, joints_of, map_channels, read_pose_table
+from gaitcore.project.footage_fit import RigFit, fit_rig
 from gaitcore.project.steps import alternates_in_use, frames_to_pose, missing_poses, read_rig
 from gaitcore.rig.posing import drag_end, effector_chain_top, turn_joint
 from gaitcore.rig.skeleton import Skeleton
@@ -38,10 +41,12 @@ class PosingController(QObject):
 
     messageRaised = Signal(str)
 
-    def __init__(self, state: AppState, asker: Asker, parent: QObject | None = None) -> None:
+    def __init__(self, state: AppState, asker: Asker, parent: QObject | None = None, *,
+                 run: Callable[[Job, Callable[[object], None]], object] | None = None) -> None:
         super().__init__(parent)
         self._state = state
         self.asker = asker
+        self._run = run
         self._clipboard: np.ndarray | None = None
         self._drags = count()
         self._drag_id = 0
@@ -176,6 +181,46 @@ class PosingController(QObject):
             self._push(frame, pose, f"reset {joint} on frame {frame}")
         else:
             self._push(frame, skeleton.rest_pose(), f"reset pose on frame {frame}")
+
+    # -- the rig's proportions ----------------------------------------------------------------
+    def set_proportion(self, part: str, scale: float) -> None:
+        """Scale one part of the rig (legs, neck, body, head, tail); one undo step per part."""
+        props = replace(self._state.project.proportions, **{part: float(scale)})
+        if props != self._state.project.proportions:
+            self._state.undo_stack.push(ProportionsCommand(self._state, props, part))
+
+    def fit_rig(self) -> Job | None:
+        """Fit the rig's proportions and the footage's place to this key's silhouette (in the
+        background when the window gave a job runner); one undo step."""
+        frame, project = self._require_frame(), self._state.project
+        if frame is None:
+            return None
+        if project.silhouettes is None:
+            self.messageRaised.emit("no silhouettes yet: segment or sketch the clip first")
+            return None
+        template, pose = self._state.template_skeleton, self.pose_of(frame)
+        start = replace(project.proportions, legs=1.0, neck=1.0, head=1.0, tail=1.0)
+
+        def work(progress) -> RigFit:
+            return fit_rig(template, pose, project.silhouettes, frame, start=start,
+                           flip=project.footage_fit.flip, progress=progress)
+
+        def apply(result: RigFit) -> None:
+            self._state.undo_stack.push(
+                FitRigCommand(self._state, result.proportions, result.footage_fit, frame))
+            m = result.measures
+            self.messageRaised.emit(
+                f"rig fitted to frame {frame} ({100 * m.overlap:.0f}% overlap): body "
+                f"{m.body_length_m:.2f} m, withers {m.withers_height_m:.2f} m, leg "
+                f"{m.leg_length_m:.2f} m; correct the scales if needed")
+
+        if self._run is not None:
+            return self._run(Job(work, f"Fit the rig to frame {frame}", unit=None), apply)
+        try:
+            apply(work(None))
+        except GaitInputError as exc:
+            self.asker.error("Cannot fit the rig", str(exc))
+        return None
 
     # -- imports and rigs --------------------------------------------------------------------
     def import_csv(self, path: Path | None = None) -> bool:

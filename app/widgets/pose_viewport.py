@@ -52,6 +52,7 @@ from gaitcore.project.footage_fit import (
     silhouette_outline_px,
     skeleton_extent,
 )
+from gaitcore.rig.proportions import PARTS, SCALE_RANGE
 from gaitcore.rig.skeleton import Skeleton
 
 VIEW_MARGIN = 1.35
@@ -77,6 +78,7 @@ class PoseViewport(QWidget):
         self._posing = posing
         self._animation = animation
         self._skeleton: Skeleton | None = None
+        self._template: Skeleton | None = None
         self._extent: SkeletonExtent | None = None
         self._sil: tuple[Silhouettes | None, float | None] = (None, None)
         self._image: tuple[int, np.ndarray] | None = None
@@ -149,11 +151,28 @@ class PoseViewport(QWidget):
         for widget in (self.fit_scale, self.fit_x, self.fit_y, self.fit_auto):
             fit_bar.addWidget(widget)
         fit_bar.addStretch(1)
+        rig_bar = QHBoxLayout()
+        rig_bar.addWidget(QLabel("Rig"))
+        self.part_scales: dict[str, QDoubleSpinBox] = {}
+        for part in PARTS:
+            box = _spin(f"Length of the rig's {part} relative to the template", " %",
+                        100 * SCALE_RANGE[0], 100 * SCALE_RANGE[1], 1, prefix=f"{part} ")
+            box.valueChanged.connect(lambda v, p=part: self._posing.set_proportion(p, v / 100))
+            rig_bar.addWidget(box)
+            self.part_scales[part] = box
+        self.fit_rig = QToolButton()
+        self.fit_rig.setText("Fit rig")
+        self.fit_rig.setToolTip("Fit the rig's proportions and the footage to this key's "
+                                "silhouette (body length, withers, legs, neck, head, tail)")
+        self.fit_rig.clicked.connect(self._posing.fit_rig)
+        rig_bar.addWidget(self.fit_rig)
+        rig_bar.addStretch(1)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addLayout(bar)
         layout.addLayout(shown)
         layout.addLayout(fit_bar)
+        layout.addLayout(rig_bar)
         self.gl_view: SkeletonGLView | None = None
         self.gl_container: QWidget | None = None
         if opengl_available():
@@ -226,7 +245,8 @@ class PoseViewport(QWidget):
         """Show the pose of the current frame (key pose, prediction or rest) and the footage."""
         skeleton = self._state.skeleton
         if skeleton is not self._skeleton:
-            self._skeleton = skeleton
+            new_rig = self._template is not self._state.template_skeleton  # not a new proportion
+            self._skeleton, self._template = skeleton, self._state.template_skeleton
             self._extent = skeleton_extent(skeleton)
             self._rest_root_x = float(skeleton.offsets[0, 0])
             if self.gl_view is not None:
@@ -234,7 +254,8 @@ class PoseViewport(QWidget):
                 self.gl_view.set_bone_opacity(self.bones.value() / 100)
                 self.gl_view.set_draggable_ends(
                     {j for j in range(skeleton.n_joints) if self._posing.is_draggable_end(j)})
-                self.set_view("side")
+                if new_rig:
+                    self.set_view("side")
             self._show_selected(self._state.selected_joint)
             self._update_reference()
         frame = self._state.frame
@@ -350,6 +371,8 @@ class PoseViewport(QWidget):
         for control, value in ((self.fit_scale, 100 * fit.scale), (self.fit_x, 100 * fit.offset_x_m),
                                (self.fit_y, 100 * fit.offset_y_m), (self.flip, fit.flip)):
             show_value(control, value)
+        for part, box in self.part_scales.items():
+            show_value(box, 100 * self._state.project.proportions.scale_of(part))
         if fit != self._fit:
             self._fit = fit
             self._update_reference()

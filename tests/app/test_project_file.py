@@ -10,7 +10,6 @@ import pytest
 from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.errors import GaitInputError
 from gaitcore.project.document import AnimationOptions, FootageFit, Project, Silhouettes
-from gaitcore.rig.proportions import RigProportions
 from gaitcore.project.storage import (
     VERSION,
     load_project,
@@ -18,6 +17,7 @@ from gaitcore.project.storage import (
     save_project,
     sidecar_dir,
 )
+from gaitcore.rig.proportions import RigProportions
 from gaitcore.silhouettes.annotations import Rect, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
 
