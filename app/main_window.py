@@ -33,6 +33,7 @@ from app.widgets.pose_panel import PosePanel
 from app.widgets.pose_viewport import PoseViewport
 from app.widgets.timeline import TimelineWidget
 from app.workers import FrameLoader, JobRunner
+from gaitcore.rig.orient import AXES
 
 APP_NAME = "Gait Studio"
 
@@ -162,7 +163,8 @@ class MainWindow(QMainWindow):
         undo = self.state.undo_stack.createUndoAction(self, "&Undo")
         undo.setShortcut(QKeySequence.StandardKey.Undo)
         redo = self.state.undo_stack.createRedoAction(self, "&Redo")
-        redo.setShortcuts([QKeySequence.StandardKey.Redo, QKeySequence("Ctrl+Y")])
+        keys = QKeySequence.keyBindings(QKeySequence.StandardKey.Redo)  # Ctrl+Y on some desktops
+        redo.setShortcuts(keys + [QKeySequence("Ctrl+Y")] * (QKeySequence("Ctrl+Y") not in keys))
         edit.addActions([undo, redo])
 
         play = bar.addMenu("&Playback")
@@ -172,20 +174,7 @@ class MainWindow(QMainWindow):
         self._action(play, "First frame", Qt.Key.Key_Home, lambda: self.player.go_to(0))
         self._action(play, "Last frame", Qt.Key.Key_End, lambda: self.player.go_to(-1))
 
-        pose = bar.addMenu("P&ose")
-        posing = self.posing
-        self._action(pose, "&Copy pose", "Ctrl+Shift+C", posing.copy)
-        self._action(pose, "&Paste pose", "Ctrl+Shift+V", posing.paste)
-        self._action(pose, "Paste &mirrored pose", "Ctrl+Shift+M", lambda: posing.paste(mirrored=True))
-        self._action(pose, "M&irror left/right", "Ctrl+M", posing.mirror)
-        self._action(pose, "Pose alternate as mirror of its &key", None, posing.mirror_of_key)
-        self._action(pose, "&Reset pose", None, lambda: posing.reset(joint_only=False))
-        pose.addSeparator()
-        self._action(pose, "Import pose from &CSV...", None, posing.import_csv)
-        self._action(pose, "Import pose from &BVH frame...", None, posing.import_bvh)
-        pose.addSeparator()
-        self._action(pose, "&Load rig from BVH...", None, posing.load_rig)
-        self._action(pose, "Use the &horse template", None, posing.use_template)
+        self._build_pose_menu(bar.addMenu("P&ose"))
 
         tools = bar.addMenu("&Tools")
         tools.addActions(list(self.tools.tool_actions.values()))
@@ -203,6 +192,30 @@ class MainWindow(QMainWindow):
         for dock in self.docks.values():
             view.addAction(dock.toggleViewAction())
         view.addAction(self.tools.toolbar.toggleViewAction())
+
+    def _build_pose_menu(self, pose: QMenu) -> None:
+        posing = self.posing
+        self._action(pose, "&Copy pose", "Ctrl+Alt+C", posing.copy)  # Ctrl+Shift+C: copy strokes
+        self._action(pose, "&Paste pose", "Ctrl+Alt+V", posing.paste)
+        self._action(pose, "Paste &mirrored pose", "Ctrl+Alt+M", lambda: posing.paste(mirrored=True))
+        self._action(pose, "M&irror left/right", "Ctrl+M", posing.mirror)
+        self._action(pose, "Pose alternate as mirror of its &key", None, posing.mirror_of_key)
+        self._action(pose, "&Reset pose", None, lambda: posing.reset(joint_only=False))
+        pose.addSeparator()
+        self._action(pose, "Import pose from &CSV...", None, posing.import_csv)
+        self._action(pose, "Import pose from &BVH frame...", None, posing.import_bvh)
+        pose.addSeparator()
+        self._action(pose, "&Load rig from BVH...", None, posing.load_rig)
+        axes = pose.addMenu("Rig &axes")  # when an imported rig's axes were read wrong
+        for axis in AXES:
+            forward = "+X" if axis[1] != "X" else ("-Y" if axis == "+X" else "+Y")
+            self._action(axes, f"Up is the rig's {axis} as shown", None,
+                         lambda a=axis, f=forward: posing.turn_rig(a, f))
+        axes.addSeparator()
+        for axis in ("+X", "-X", "+Z", "-Z"):
+            self._action(axes, f"Forward is the rig's {axis} as shown", None,
+                         lambda a=axis: posing.turn_rig("+Y", a))
+        self._action(pose, "Use the &horse template", None, posing.use_template)
 
     def _fill_recent(self, files: list[str]) -> None:
         self.recent_menu.clear()

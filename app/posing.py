@@ -26,6 +26,7 @@ from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.pose_table import PoseTable, joints_of, map_channels, read_pose_table
 from gaitcore.project.footage_fit import RigFit, fit_rig
 from gaitcore.project.steps import alternates_in_use, frames_to_pose, missing_poses, read_rig
+from gaitcore.rig.orient import reoriented
 from gaitcore.rig.posing import drag_end, effector_chain_top, turn_joint
 from gaitcore.rig.skeleton import Skeleton
 
@@ -224,16 +225,15 @@ class PosingController(QObject):
 
     # -- imports and rigs --------------------------------------------------------------------
     def import_csv(self, path: Path | None = None) -> bool:
-        """Pose the current key from a row of a pose CSV (channels matched by name)."""
+        """Pose the current key from a row of a pose CSV (channels matched by name); with more
+        than one row the artist is asked which (the row of the same frame is suggested)."""
 
         def pick(path: Path) -> tuple[PoseTable, int | None]:
             table = read_pose_table(path)
             frames = [int(f) for f in table.frames]
             if not frames:
                 raise GaitInputError("it has no rows")
-            row = frames.index(self._state.frame) if self._state.frame in frames else (
-                0 if len(frames) == 1 else self._choose_row(frames))
-            return table, row
+            return table, 0 if len(frames) == 1 else self._choose_row(path, frames)
 
         return self._import_pose(path, "Import a pose from CSV", "Pose tables (*.csv)", pick)
 
@@ -245,7 +245,10 @@ class PosingController(QObject):
             n = len(table.frames)
             if n == 0:
                 raise GaitInputError("it has no motion frames")
-            row = 0 if n == 1 else self.asker.choose_frame(f"Frame of {path.name}", list(range(n)))
+            frame = self._state.frame if self._state.frame < n else None
+            row = 0 if n == 1 else self.asker.choose_frame(
+                f"Which frame of {path.name} poses frame {self._state.frame}?", list(range(n)),
+                suggested=frame)
             return table, row
 
         return self._import_pose(path, "Import a pose from a BVH frame", "BVH motion (*.bvh)", pick)
@@ -285,6 +288,17 @@ class PosingController(QObject):
             self.messageRaised.emit(note)
         return self._replace_skeleton(skeleton, f"load rig {skeleton.name}")
 
+    def turn_rig(self, up: str, forward: str) -> bool:
+        """Turn the rig so that its axis ``up`` (as now shown: "+X" ... "-Z") points up and
+        ``forward`` forward, standing on the ground (when an imported rig's axes were read
+        wrong); the poses are kept."""
+        try:
+            rig = reoriented(self._state.template_skeleton, up=up, forward=forward)
+        except GaitInputError as exc:
+            self.asker.error("Cannot turn the rig", str(exc))
+            return False
+        return self._replace_skeleton(rig, f"turn the rig ({up} up, facing {forward})")
+
     def use_template(self) -> bool:
         """Go back to the bundled horse template."""
         return self._replace_skeleton(None, "use the horse template")
@@ -311,8 +325,12 @@ class PosingController(QObject):
         return True
 
     # -- helpers -----------------------------------------------------------------------------
-    def _choose_row(self, frames: list[int]) -> int | None:
-        chosen = self.asker.choose_frame("Which row of the pose table?", frames)
+    def _choose_row(self, path: Path, frames: list[int]) -> int | None:
+        """Ask which row poses the current key (the row of the same frame number, if any, is
+        only suggested: a table's frame numbers need not be the clip's)."""
+        chosen = self.asker.choose_frame(
+            f"Which row of {path.name} poses frame {self._state.frame}?", frames,
+            suggested=self._state.frame if self._state.frame in frames else None)
         return None if chosen is None else frames.index(chosen)
 
     def _apply_import(self, pose: np.ndarray, ignored: list[str], text: str) -> bool:

@@ -65,6 +65,7 @@ class ScriptedAsker(Asker):
         self.next_export_path: Path | None = None
         self.confirm_answer = True
         self.chosen_frame: int | None = None
+        self.suggested: int | None = None
         self.asked: list[str] = []
 
     def error(self, title: str, message: str) -> None:
@@ -101,8 +102,10 @@ class ScriptedAsker(Asker):
         self.asked.append(f"{title}: {message}")
         return self.confirm_answer
 
-    def choose_frame(self, title: str, frames: list[int]) -> int | None:
+    def choose_frame(self, title: str, frames: list[int], *,
+                     suggested: int | None = None) -> int | None:
         self.asked.append(title)
+        self.suggested = suggested
         return self.chosen_frame
 
 
