@@ -250,3 +250,34 @@ def test_footage_shows_through_bones_left_and_right_in_their_colours(qtbot, wind
     tree = window.pose_panel.joints
     item = tree.findItems("L_elbow", Qt.MatchFlag.MatchExactly | Qt.MatchFlag.MatchRecursive)[0]
     assert item.foreground(0).color().getRgb()[:3] == SIDE_RGB["L"]
+
+
+def test_a_z_up_centimetre_quadruped_loads_standing_in_view_at_the_footage_scale(
+        qtbot, window, posed_key, asker, tmp_path, artifacts_dir):
+    from gaitcore.project.footage_fit import skeleton_extent
+    from gaitcore.rig.skeleton import Skeleton
+    from tests.gaitcore.test_orient import written_as
+
+    doc = window.state.skeleton.to_dict()  # a dog-sized quadruped
+    for joint in doc["joints"]:
+        joint["offset"] = [0.45 * v for v in joint["offset"]]
+    dog = Skeleton.from_json(dict(doc, name="dog"))
+    written_as(dog, tmp_path / "dog.bvh", up="+Z", forward="-Y", unit_m=0.01,
+               root_at=(470.0, 20.0, 0.0))  # 4.7 m to the side, as a real file had it
+    assert window.posing.load_rig(tmp_path / "dog.bvh")
+    assert "centimetres" in window.statusBar().currentMessage()
+    state, view, viewport = window.state, window.viewport.gl_view, window.viewport
+    rig = state.skeleton
+    rest = rig.joint_positions(rig.rest_pose())
+    assert rest[:, 1].min() == pytest.approx(0.0, abs=1e-6)  # on the ground ...
+    assert np.ptp(rest[:, 1]) == pytest.approx(0.45 * 1.9, rel=0.1)  # ... in metres, upright
+    head, root = rest[rig.joint_index("head")], rest[0]
+    assert head[0] > root[0] and abs(root[2]) < 1e-9  # facing +X, not off to the side
+    qtbot.waitUntil(lambda: viewport._ref is not None and viewport._skeleton is rig)
+    qtbot.wait(100)
+    screen = view.project(view.joint_positions())
+    assert np.all((screen > 0) & (screen < (view.width(), view.height())))  # framed
+    outline = np.concatenate(viewport._outline_world)  # the animal in the footage ...
+    extent = skeleton_extent(rig)
+    assert np.ptp(outline[:, 1]) == pytest.approx(extent.height_m, rel=0.15)  # ... at its size
+    view.render_image().save(str(artifacts_dir / "app_pose_viewport_dog_rig.png"))
