@@ -12,7 +12,15 @@ from pathlib import Path
 
 from PySide6.QtCore import QPoint, QRect, QSettings, QStandardPaths, Qt
 from PySide6.QtGui import QAction, QKeySequence, QPainter, QPixmap
-from PySide6.QtWidgets import QDockWidget, QMainWindow, QMenu, QSplitter, QWidget
+from PySide6.QtWidgets import (
+    QDockWidget,
+    QFrame,
+    QMainWindow,
+    QMenu,
+    QScrollArea,
+    QSplitter,
+    QWidget,
+)
 
 from app.analysis_controller import AnalysisController
 from app.animation import AnimationController
@@ -96,8 +104,10 @@ class MainWindow(QMainWindow):
             "timeline": self._dock("Timeline", self.timeline, Qt.DockWidgetArea.BottomDockWidgetArea),
             "animation": self._dock("Animation weights", self.animation_view, Qt.DockWidgetArea.BottomDockWidgetArea),
             "pcs": self._dock("PC1 × PC2 and key-images", self.pc_plot, Qt.DockWidgetArea.RightDockWidgetArea),
-            "diagnosis": self._dock("Diagnosis", self.diagnosis, Qt.DockWidgetArea.RightDockWidgetArea),
-            "posing": self._dock("Posing", self.pose_panel, Qt.DockWidgetArea.LeftDockWidgetArea),
+            "diagnosis": self._dock("Diagnosis", self.diagnosis, Qt.DockWidgetArea.RightDockWidgetArea,
+                                    scroll=True),
+            "posing": self._dock("Posing", self.pose_panel, Qt.DockWidgetArea.LeftDockWidgetArea,
+                                 scroll=True),
             "eigen": self._dock("Eigen-images", self.eigen, Qt.DockWidgetArea.LeftDockWidgetArea),
         }
         self.splitDockWidget(self.docks["timeline"], self.docks["animation"], Qt.Orientation.Vertical)
@@ -125,9 +135,19 @@ class MainWindow(QMainWindow):
             self._restore_layout()
         self._update_title()
 
-    def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea) -> QDockWidget:
+    def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea, *,
+              scroll: bool = False) -> QDockWidget:
+        """A dock of ``widget``; with ``scroll`` (docks of text) a dock made small scrolls
+        up and down instead of cutting the text off."""
         dock = QDockWidget(title, self)
         dock.setObjectName(title.split()[0].lower() + "Dock")
+        if scroll:
+            scroller = QScrollArea()
+            scroller.setWidget(widget)
+            scroller.setWidgetResizable(True)
+            scroller.setFrameShape(QFrame.Shape.NoFrame)
+            scroller.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+            widget = scroller
         dock.setWidget(widget)
         self.addDockWidget(area, dock)
         return dock

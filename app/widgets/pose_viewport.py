@@ -28,12 +28,15 @@ from PySide6.QtGui import QKeySequence, QShortcut
 from PySide6.QtWidgets import (
     QCheckBox,
     QDoubleSpinBox,
+    QFormLayout,
     QHBoxLayout,
     QLabel,
+    QMenu,
     QSpinBox,
     QToolButton,
     QVBoxLayout,
     QWidget,
+    QWidgetAction,
 )
 
 from app.animation import AnimationController
@@ -122,8 +125,8 @@ class PoseViewport(QWidget):
         self.bones.setRange(0, 100)
         self.bones.setSingleStep(10)
         self.bones.setValue(round(100 * DEFAULT_BONE_OPACITY))
-        self.bones.setPrefix("bones ")
         self.bones.setSuffix(" %")
+        self.bones.setPrefix("bones ")
         self.bones.setToolTip("Opacity of the bones: lower sees the footage through them, "
                               "0 shows the stick figure only")
         self.outline = QCheckBox("Outline")
@@ -132,9 +135,8 @@ class PoseViewport(QWidget):
         self.onion = QCheckBox("Onion")
         self.onion.setChecked(True)
         self.onion.setToolTip("The previous and next posed keys, faint (blue before, orange after)")
-        bar.addWidget(self.bones)
         shown = QHBoxLayout()
-        for widget in (self.footage, self.flip, self.outline, self.onion):
+        for widget in (self.footage, self.flip, self.outline, self.onion, self.bones):
             shown.addWidget(widget)
         shown.addStretch(1)
         self.hover = QLabel()
@@ -151,28 +153,23 @@ class PoseViewport(QWidget):
         for widget in (self.fit_scale, self.fit_x, self.fit_y, self.fit_auto):
             fit_bar.addWidget(widget)
         fit_bar.addStretch(1)
-        rig_bar = QHBoxLayout()
-        rig_bar.addWidget(QLabel("Rig"))
-        self.part_scales: dict[str, QDoubleSpinBox] = {}
-        for part in PARTS:
-            box = _spin(f"Length of the rig's {part} relative to the template", " %",
-                        100 * SCALE_RANGE[0], 100 * SCALE_RANGE[1], 1, prefix=f"{part} ")
-            box.valueChanged.connect(lambda v, p=part: self._posing.set_proportion(p, v / 100))
-            rig_bar.addWidget(box)
-            self.part_scales[part] = box
         self.fit_rig = QToolButton()
         self.fit_rig.setText("Fit rig")
         self.fit_rig.setToolTip("Fit the rig's proportions and the footage to this key's "
                                 "silhouette (body length, withers, legs, neck, head, tail)")
         self.fit_rig.clicked.connect(self._posing.fit_rig)
-        rig_bar.addWidget(self.fit_rig)
-        rig_bar.addStretch(1)
+        self.proportions = QToolButton()
+        self.proportions.setText("Proportions")
+        self.proportions.setToolTip("Length of each part of the rig relative to the template")
+        self.proportions.setPopupMode(QToolButton.ToolButtonPopupMode.InstantPopup)
+        self.part_scales = self._proportions_menu()
+        bar.insertWidget(bar.count() - 1, self.proportions)
+        bar.insertWidget(bar.count() - 1, self.fit_rig)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(2, 2, 2, 2)
         layout.addLayout(bar)
         layout.addLayout(shown)
         layout.addLayout(fit_bar)
-        layout.addLayout(rig_bar)
         self.gl_view: SkeletonGLView | None = None
         self.gl_container: QWidget | None = None
         if opengl_available():
@@ -230,6 +227,24 @@ class PoseViewport(QWidget):
             self._view_name = name
             self.gl_view.set_view(name, e.box_center_xy,
                                   (width * VIEW_MARGIN, height * VIEW_MARGIN, along))
+
+    def _proportions_menu(self) -> dict[str, QDoubleSpinBox]:
+        """The popup of the Proportions button: one spin box per part of the rig."""
+        menu = QMenu(self.proportions)
+        panel = QWidget()
+        form = QFormLayout(panel)
+        boxes = {}
+        for part in PARTS:
+            box = _spin(f"Length of the rig's {part} relative to the template", " %",
+                        100 * SCALE_RANGE[0], 100 * SCALE_RANGE[1], 1)
+            box.valueChanged.connect(lambda v, p=part: self._posing.set_proportion(p, v / 100))
+            form.addRow(part, box)
+            boxes[part] = box
+        action = QWidgetAction(menu)
+        action.setDefaultWidget(panel)
+        menu.addAction(action)
+        self.proportions.setMenu(menu)
+        return boxes
 
     def frame_rig(self) -> None:
         """Aim at the rig as shown and fill the view with it (F, as in Blender and Maya)."""
