@@ -103,10 +103,39 @@ class PoseViewport(QWidget):
         self.info = QLabel()
         self.info.setWordWrap(True)
         self.setMinimumSize(260, 200)
-        self.footage = QCheckBox("Footage")
-        self.footage.setChecked(True)
-        self.flip = QCheckBox("Flip")
-        self.flip.setToolTip("Mirror the footage left-right (animal moving to the left)")
+        self.hover = QLabel()
+        self.hover.setToolTip("The joint under the cursor: left joints blue, right joints red")
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(2, 2, 2, 2)
+        layout.addLayout(self._camera_bar())
+        layout.addLayout(self._shown_bar())
+        layout.addLayout(self._fit_bar())
+        self.gl_view: SkeletonGLView | None = None
+        self.gl_container: QWidget | None = None
+        layout.addWidget(self._gl_or_note(), 1)
+        layout.addWidget(self.hover)
+        layout.addWidget(self.info)
+
+        self._connect(state, loader, animation)
+        self._fit = FootageFit()
+        self._show_fit()
+        self.refresh()
+
+    # -- camera ------------------------------------------------------------------------------
+    def set_view(self, name: str) -> None:
+        """Look from the side, front or top at the whole skeleton."""
+        if self.gl_view is not None and self._extent is not None:
+            e = self._extent
+            width = e.length_m if name in ("side", "top") else 2 * e.depth_m
+            height = 2 * e.depth_m if name == "top" else e.height_m
+            along = {"side": 2 * e.depth_m, "top": e.height_m}.get(name, e.length_m)
+            self._view_name = name
+            self.gl_view.set_view(name, e.box_center_xy,
+                                  (width * VIEW_MARGIN, height * VIEW_MARGIN, along))
+
+    # -- construction ------------------------------------------------------------------------
+    def _camera_bar(self) -> QHBoxLayout:
+        """Side, front, top, Frame; the rig's proportions and their fit."""
         bar = QHBoxLayout()
         self.view_buttons = {}
         for name in ("side", "front", "top"):
@@ -119,8 +148,33 @@ class PoseViewport(QWidget):
         self.frame_button = QToolButton()
         self.frame_button.setText("Frame")
         self.frame_button.setToolTip("Frame the whole rig (F)")
-        bar.addWidget(self.frame_button)
+        self.proportions = QToolButton()
+        self.proportions.setText("Proportions")
+        self.proportions.setToolTip("Length of each part of the rig relative to the template")
+        self.proportions.setPopupMode(QToolButton.ToolButtonPopupMode.InstantPopup)
+        self.part_scales = self._proportions_menu()
+        self.fit_rig = QToolButton()
+        self.fit_rig.setText("Fit rig")
+        self.fit_rig.setToolTip("Fit the rig's proportions and the footage to this key's "
+                                "silhouette (body length, withers, legs, neck, head, tail)")
+        self.fit_rig.clicked.connect(self._posing.fit_rig)
+        for widget in (self.frame_button, self.proportions, self.fit_rig):
+            bar.addWidget(widget)
         bar.addStretch(1)
+        return bar
+
+    def _shown_bar(self) -> QHBoxLayout:
+        """What is drawn: footage (mirrored or not), outline, onion skin, bone opacity."""
+        self.footage = QCheckBox("Footage")
+        self.footage.setChecked(True)
+        self.flip = QCheckBox("Flip")
+        self.flip.setToolTip("Mirror the footage left-right (animal moving to the left)")
+        self.outline = QCheckBox("Outline")
+        self.outline.setChecked(True)
+        self.outline.setToolTip("The silhouette's outline over the footage")
+        self.onion = QCheckBox("Onion")
+        self.onion.setChecked(True)
+        self.onion.setToolTip("The previous and next posed keys, faint (blue before, orange after)")
         self.bones = QSpinBox()
         self.bones.setRange(0, 100)
         self.bones.setSingleStep(10)
@@ -129,18 +183,14 @@ class PoseViewport(QWidget):
         self.bones.setPrefix("bones ")
         self.bones.setToolTip("Opacity of the bones: lower sees the footage through them, "
                               "0 shows the stick figure only")
-        self.outline = QCheckBox("Outline")
-        self.outline.setChecked(True)
-        self.outline.setToolTip("The silhouette's outline over the footage")
-        self.onion = QCheckBox("Onion")
-        self.onion.setChecked(True)
-        self.onion.setToolTip("The previous and next posed keys, faint (blue before, orange after)")
-        shown = QHBoxLayout()
+        bar = QHBoxLayout()
         for widget in (self.footage, self.flip, self.outline, self.onion, self.bones):
-            shown.addWidget(widget)
-        shown.addStretch(1)
-        self.hover = QLabel()
-        self.hover.setToolTip("The joint under the cursor: left joints blue, right joints red")
+            bar.addWidget(widget)
+        bar.addStretch(1)
+        return bar
+
+    def _fit_bar(self) -> QHBoxLayout:
+        """The footage's size and shift relative to the automatic placement."""
         self.fit_scale = _spin("Footage size relative to the automatic fit", " %", 20, 500, 5)
         self.fit_x = _spin("Shift the footage along the direction of travel", " cm", -300, 300, 1,
                            prefix="x ")
@@ -148,49 +198,33 @@ class PoseViewport(QWidget):
         self.fit_auto = QToolButton()
         self.fit_auto.setText("Auto")
         self.fit_auto.setToolTip("Back to the automatic fit (silhouette height and centre)")
-        fit_bar = QHBoxLayout()
-        fit_bar.addWidget(QLabel("Fit"))
+        bar = QHBoxLayout()
+        bar.addWidget(QLabel("Fit"))
         for widget in (self.fit_scale, self.fit_x, self.fit_y, self.fit_auto):
-            fit_bar.addWidget(widget)
-        fit_bar.addStretch(1)
-        self.fit_rig = QToolButton()
-        self.fit_rig.setText("Fit rig")
-        self.fit_rig.setToolTip("Fit the rig's proportions and the footage to this key's "
-                                "silhouette (body length, withers, legs, neck, head, tail)")
-        self.fit_rig.clicked.connect(self._posing.fit_rig)
-        self.proportions = QToolButton()
-        self.proportions.setText("Proportions")
-        self.proportions.setToolTip("Length of each part of the rig relative to the template")
-        self.proportions.setPopupMode(QToolButton.ToolButtonPopupMode.InstantPopup)
-        self.part_scales = self._proportions_menu()
-        bar.insertWidget(bar.count() - 1, self.proportions)
-        bar.insertWidget(bar.count() - 1, self.fit_rig)
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(2, 2, 2, 2)
-        layout.addLayout(bar)
-        layout.addLayout(shown)
-        layout.addLayout(fit_bar)
-        self.gl_view: SkeletonGLView | None = None
-        self.gl_container: QWidget | None = None
-        if opengl_available():
-            self.gl_view = SkeletonGLView()
-            self.gl_container = QWidget.createWindowContainer(self.gl_view, self)
-            self.gl_container.setFocusPolicy(Qt.FocusPolicy.ClickFocus)
-            layout.addWidget(self.gl_container, 1)
-            self.gl_view.jointPressed.connect(self._on_joint_pressed)
-            self.gl_view.jointDragged.connect(self._on_joint_dragged)
-            self.gl_view.endDragged.connect(self._on_end_dragged)
-            self.gl_view.jointHovered.connect(self._show_hovered)
-            self.gl_view.frameRequested.connect(self.frame_rig)
-        else:
+            bar.addWidget(widget)
+        bar.addStretch(1)
+        return bar
+
+    def _gl_or_note(self) -> QWidget:
+        """The GL view in its window container, or a note where OpenGL is missing."""
+        if not opengl_available():
             note = QLabel("The 3D viewport needs OpenGL, which this display does not offer.\n"
                           "Pose with the Posing panel; everything else works.")
             note.setAlignment(Qt.AlignmentFlag.AlignCenter)
             note.setWordWrap(True)
-            layout.addWidget(note, 1)
-        layout.addWidget(self.hover)
-        layout.addWidget(self.info)
+            return note
+        self.gl_view = SkeletonGLView()
+        self.gl_container = QWidget.createWindowContainer(self.gl_view, self)
+        self.gl_container.setFocusPolicy(Qt.FocusPolicy.ClickFocus)
+        self.gl_view.jointPressed.connect(self._on_joint_pressed)
+        self.gl_view.jointDragged.connect(self._on_joint_dragged)
+        self.gl_view.endDragged.connect(self._on_end_dragged)
+        self.gl_view.jointHovered.connect(self._show_hovered)
+        self.gl_view.frameRequested.connect(self.frame_rig)
+        return self.gl_container
 
+    def _connect(self, state: AppState, loader: FrameLoader, animation: AnimationController) -> None:
+        """The state, the loader and the controls drive the view."""
         loader.frameLoaded.connect(self._on_frame_loaded)
         state.frameChanged.connect(self.refresh)
         state.projectChanged.connect(self.refresh)
@@ -212,21 +246,6 @@ class PoseViewport(QWidget):
         self.fit_x.valueChanged.connect(lambda v: self._edit_fit("shift", offset_x_m=v / 100))
         self.fit_y.valueChanged.connect(lambda v: self._edit_fit("shift", offset_y_m=v / 100))
         self.fit_auto.clicked.connect(self._auto_fit)
-        self._fit = FootageFit()
-        self._show_fit()
-        self.refresh()
-
-    # -- camera ------------------------------------------------------------------------------
-    def set_view(self, name: str) -> None:
-        """Look from the side, front or top at the whole skeleton."""
-        if self.gl_view is not None and self._extent is not None:
-            e = self._extent
-            width = e.length_m if name in ("side", "top") else 2 * e.depth_m
-            height = 2 * e.depth_m if name == "top" else e.height_m
-            along = {"side": 2 * e.depth_m, "top": e.height_m}.get(name, e.length_m)
-            self._view_name = name
-            self.gl_view.set_view(name, e.box_center_xy,
-                                  (width * VIEW_MARGIN, height * VIEW_MARGIN, along))
 
     def _proportions_menu(self) -> dict[str, QDoubleSpinBox]:
         """The popup of the Proportions button: one spin box per part of the rig."""

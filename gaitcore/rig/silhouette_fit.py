@@ -172,7 +172,14 @@ def fit_proportions(mask: np.ndarray, skeleton: Skeleton, pose: np.ndarray, *,
         cover = view.coverage(scales, mpp, origin, m.shape)
         return 1.0 - float(np.minimum(cover, target).sum() / max(np.maximum(cover, target).sum(), 1e-9))
 
-    x0 = _start(view, m, start, part_of, parts)
+    result = _minimise(loss, _start(view, m, start, part_of, parts), progress)
+    props, scales, mpp, origin = unpack(result.x)
+    return ProportionsFit(props, mpp, (float(origin[0]), float(origin[1])), 1.0 - float(result.fun),
+                          *rig_measures(skeleton, props))
+
+
+def _minimise(loss, x0: np.ndarray, progress: Progress | None):
+    """Powell's method, restarted (it stalls along its first directions), with progress."""
     passes = [0]
     total = (POWELL_RESTARTS + 1) * POWELL_PASSES
 
@@ -180,13 +187,11 @@ def fit_proportions(mask: np.ndarray, skeleton: Skeleton, pose: np.ndarray, *,
         passes[0] += 1
         report(progress, min(passes[0], total), total, "rig fit cancelled")
 
-    for _ in range(POWELL_RESTARTS + 1):  # Powell stalls along its first directions: restart
+    for _ in range(POWELL_RESTARTS + 1):
         result = minimize(loss, x0, method="Powell", callback=step,
                           options={"xtol": 1e-3, "ftol": 1e-6, "maxiter": POWELL_PASSES})
         x0 = result.x
-    props, scales, mpp, origin = unpack(result.x)
-    return ProportionsFit(props, mpp, (float(origin[0]), float(origin[1])), 1.0 - float(result.fun),
-                          *rig_measures(skeleton, props))
+    return result
 
 
 def _start(view: _SideView, mask: np.ndarray, start: RigProportions, part_of: np.ndarray,
