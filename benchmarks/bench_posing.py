@@ -61,19 +61,23 @@ def run() -> list[Section]:
     parts = {"legs": [i for i in idx if skeleton.channel_names[i][:2] in ("L_", "R_")],
              "neck, head": [i for i in idx if skeleton.channel_names[i].startswith(("neck", "head"))],
              "tail": [i for i in idx if skeleton.channel_names[i].startswith("tail")]}
-    template = np.array([angle_error_deg(skeleton.rest_pose()[idx], truth[k][idx]).mean()
-                         for k in keys])
+    position = {i: n for n, i in enumerate(idx)}
+
+    def by_part(err: np.ndarray) -> list[str]:
+        return [f"{err[:, [position[i] for i in v]].mean():.1f}" for v in parts.values()]
+
+    untouched = np.array([angle_error_deg(skeleton.rest_pose()[idx], truth[k][idx]) for k in keys])
+    template = untouched.mean(axis=1)
     rows, lines = [], []
-    rows.append(["template pose, untouched", f"{template.mean():.2f}", 0, "", "", "", ""])
+    rows.append(["template pose, untouched", f"{template.mean():.2f}", 0, *by_part(untouched), ""])
     for label, drag in (("drags, damped least squares (the viewport's)", drag_end),
                         ("drags, two-bone legs", _two_bone)):
         start = time.perf_counter()
         posed = [pose_by_drags(skeleton, truth[k], drag) for k in keys]
         ms = 1000 * (time.perf_counter() - start) / sum(n for _, n in posed)
         err = np.array([angle_error_deg(p[idx], truth[k][idx]) for (p, _), k in zip(posed, keys)])
-        by_part = [f"{err[:, [list(idx).index(i) for i in v]].mean():.1f}" for v in parts.values()]
         drags = np.mean([n for _, n in posed])
-        rows.append([label, f"{err.mean():.2f}", f"{drags:g}", *by_part, f"{ms:.1f}"])
+        rows.append([label, f"{err.mean():.2f}", f"{drags:g}", *by_part(err), f"{ms:.1f}"])
         lines.append(f"{label}: mean joint-angle error {err.mean():.2f} deg with {drags:g} "
                      f"drags per key (template untouched: {template.mean():.2f} deg; target "
                      f"<= {TARGET_DEG:g} deg with <= {TARGET_DRAGS} drags)")
