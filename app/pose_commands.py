@@ -45,11 +45,15 @@ class SetPoseCommand(ProjectCommand):
 
 
 class SetSkeletonCommand(ProjectCommand):
-    """Pose another rig (None: the horse template) with ``key_poses`` laid out for it."""
+    """Pose another rig (None: the horse template) with ``key_poses`` laid out for it, in
+    ``proportions`` (None: keep the project's)."""
 
     def __init__(self, state: AppState, skeleton: Skeleton | None,
-                 key_poses: Mapping[int, tuple[float, ...]], text: str) -> None:
-        super().__init__(state, replace(state.project, skeleton=skeleton, key_poses=key_poses), text)
+                 key_poses: Mapping[int, tuple[float, ...]], text: str, *,
+                 proportions: RigProportions | None = None) -> None:
+        after = replace(state.project, skeleton=skeleton, key_poses=key_poses,
+                        proportions=proportions or state.project.proportions)
+        super().__init__(state, after, text)
 
 
 class ProportionsCommand(_FieldCommand):

@@ -18,7 +18,12 @@ import numpy as np
 from PySide6.QtCore import QObject, Signal
 
 from app.dialogs import Asker
-from app.pose_commands import FitRigCommand, ProportionsCommand, SetPoseCommand, SetSkeletonCommand
+from app.pose_commands import (
+    FitRigCommand,
+    ProportionsCommand,
+    SetPoseCommand,
+    SetSkeletonCommand,
+)
 from app.state import AppState
 from app.workers import Job
 from gaitcore.errors import GaitInputError
@@ -28,6 +33,7 @@ from gaitcore.project.footage_fit import RigFit, fit_rig
 from gaitcore.project.steps import alternates_in_use, frames_to_pose, missing_poses, read_rig
 from gaitcore.rig.orient import reoriented
 from gaitcore.rig.posing import drag_end, effector_chain_top, turn_joint
+from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
 
 
@@ -286,7 +292,7 @@ class PosingController(QObject):
             return False
         if note:
             self.messageRaised.emit(note)
-        return self._replace_skeleton(skeleton, f"load rig {skeleton.name}")
+        return self._replace_skeleton(skeleton, f"load rig {skeleton.name}", new_rig=True)
 
     def turn_rig(self, up: str, forward: str) -> bool:
         """Turn the rig so that its axis ``up`` (as now shown: "+X" ... "-Z") points up and
@@ -301,9 +307,12 @@ class PosingController(QObject):
 
     def use_template(self) -> bool:
         """Go back to the bundled horse template."""
-        return self._replace_skeleton(None, "use the horse template")
+        return self._replace_skeleton(None, "use the horse template", new_rig=True)
 
-    def _replace_skeleton(self, skeleton: Skeleton | None, text: str) -> bool:
+    def _replace_skeleton(self, skeleton: Skeleton | None, text: str, *,
+                          new_rig: bool = False) -> bool:
+        """Pose ``skeleton`` (None: the template) instead; a ``new_rig`` starts from its own
+        proportions (those fitted to the old one do not apply)."""
         from app.state import default_skeleton
 
         project, old = self._state.project, self._state.skeleton
@@ -320,7 +329,8 @@ class PosingController(QObject):
             order = [old.channel_index(c) for c in new.channel_names]
             poses = {f: tuple(np.asarray(p)[order]) for f, p in project.key_poses.items()
                      if len(p) == old.n_channels}
-        self._state.undo_stack.push(SetSkeletonCommand(self._state, skeleton, poses, text))
+        self._state.undo_stack.push(SetSkeletonCommand(
+            self._state, skeleton, poses, text, proportions=RigProportions() if new_rig else None))
         self._state.set_selected_joint("")
         return True
 

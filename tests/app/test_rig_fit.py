@@ -55,3 +55,18 @@ def test_fit_rig_sets_proportions_and_footage_in_one_undo_step(qtbot, window, ca
     assert window.viewport.part_scales["legs"].value() == pytest.approx(100 * props.legs, abs=0.5)
     state.undo_stack.undo()
     assert state.project == before
+
+
+def test_a_new_rig_starts_from_its_own_proportions_and_turning_keeps_them(qtbot, window,
+                                                                         canter_clip):
+    open_demo(qtbot, window, canter_clip)
+    state = window.state
+    window.viewport.part_scales["legs"].setValue(120)
+    window.posing.turn_rig("+Y", "-X")  # the same rig turned round keeps its fit
+    assert state.project.proportions.legs == pytest.approx(1.2)
+    rest = state.skeleton.joint_positions(state.skeleton.rest_pose())
+    assert rest[state.skeleton.joint_index("head"), 0] < rest[0, 0]  # now facing -X
+    assert window.posing.use_template()  # a new rig: the horse's own proportions
+    assert state.project.proportions == RigProportions()
+    state.undo_stack.undo()
+    assert state.project.proportions.legs == pytest.approx(1.2)
