@@ -91,3 +91,19 @@ def test_fitting_an_empty_silhouette_says_what_to_do(horse):
 
     with pytest.raises(GaitInputError, match="segment or sketch"):
         fit_proportions(np.zeros((40, 60), bool), horse, horse.rest_pose())
+
+
+@pytest.mark.parametrize("clip", ["davis-bear", "davis-dog"])
+def test_a_real_animal_in_another_pose_never_stretches_a_part_to_a_limit(horse, shared_data, clip):
+    """The artist has not posed the key yet (rest pose), the animal is not a horse: the fit
+    must stay a plausible start for the artist's corrections, not run to the bounds."""
+    from gaitcore.project.footage_fit import fit_rig
+    from gaitcore.project.steps import silhouettes_from_masks
+    from gaitcore.rig.silhouette_fit import FIT_RANGE
+
+    silhouettes = silhouettes_from_masks(shared_data / clip / "Annotations")
+    fit = fit_rig(horse, horse.rest_pose(), silhouettes, 20)
+    for part in ("legs", "neck", "head", "tail"):
+        scale = fit.proportions.scale_of(part)
+        assert FIT_RANGE[0] * 1.05 < scale < FIT_RANGE[1] / 1.05, (part, scale)
+    assert 0.25 < fit.footage_fit.scale < 4.0
