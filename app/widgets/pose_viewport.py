@@ -174,7 +174,7 @@ class PoseViewport(QWidget):
         self.outline.setToolTip("The silhouette's outline over the footage")
         self.onion = QCheckBox("Onion")
         self.onion.setChecked(True)
-        self.onion.setToolTip("The previous and next posed keys, faint (blue before, orange after)")
+        self.onion.setToolTip("The previous and next posed keys, faint (purple before, amber after)")
         self.bones = QSpinBox()
         self.bones.setRange(0, 100)
         self.bones.setSingleStep(10)

@@ -63,8 +63,8 @@ SIDE_TINT = 0.65
 DEFAULT_BONE_OPACITY = 0.35
 FRAME_FILL = 0.85
 """Share of the view's width or height the rig fills when framed (F)."""
-ONION_RGBA = ((0.75, 0.75, 1.0, 0.5), (1.0, 0.85, 0.6, 0.5))
-"""Previous and next key's pose in the onion skin."""
+ONION_RGBA = ((0.55, 0.25, 0.75, 0.7), (0.75, 0.55, 0.05, 0.7))
+"""Previous (purple) and next (amber) key's pose in the onion skin: not the sides' colours."""
 OUTLINE_RGBA = (0.2, 1.0, 0.35, 0.9)
 SEE_THROUGH = {GL.GL_DEPTH_TEST: True, GL.GL_BLEND: True, GL.GL_CULL_FACE: True,
                "glCullFace": (GL.GL_BACK,), "glBlendFuncSeparate": BLEND_KEEP_ALPHA,

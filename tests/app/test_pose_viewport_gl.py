@@ -281,3 +281,26 @@ def test_a_z_up_centimetre_quadruped_loads_standing_in_view_at_the_footage_scale
     extent = skeleton_extent(rig)
     assert np.ptp(outline[:, 1]) == pytest.approx(extent.height_m, rel=0.15)  # ... at its size
     view.render_image().save(str(artifacts_dir / "app_pose_viewport_dog_rig.png"))
+
+
+def test_onion_skin_shows_the_neighbouring_keys_on_the_same_root(qtbot, window, posed_key,
+                                                                 artifacts_dir):
+    state, view, viewport = window.state, window.viewport.gl_view, window.viewport
+    truth = true_poses(state.skeleton)
+    keys = state.analysis.key_frames
+    for k in keys:
+        state.set_frame(k)
+        window.posing.set_pose(truth[k], "set pose")
+    state.set_frame(posed_key)
+    qtbot.waitUntil(lambda: window.frame_view.shown_frame == posed_key)
+    qtbot.wait(150)
+    shown = [item for item in view.onion if item.visible()]
+    assert len(shown) == 2  # the key before and the key after
+    root_x = view.joint_positions()[0, 0]
+    for item in shown:
+        pos = item.pos.reshape(-1, 2, 3)
+        first_child = pos[0]  # pairs start with (root, its first child)
+        assert first_child[0, 0] == pytest.approx(root_x)
+    view.render_image().save(str(artifacts_dir / "app_pose_viewport_onion.png"))
+    viewport.onion.setChecked(False)
+    assert not any(item.visible() for item in view.onion)
