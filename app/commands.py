@@ -25,6 +25,7 @@ class MergeId(IntEnum):
     SETTINGS = 1001
     FOOTAGE_FIT = 1002
     POSE = 1003
+    PROPORTIONS = 1004
 
 
 class ProjectCommand(QUndoCommand):

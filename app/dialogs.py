@@ -117,12 +117,15 @@ class Asker:
         answer = QMessageBox.question(self._parent, title, message)
         return answer == QMessageBox.StandardButton.Yes
 
-    def choose_frame(self, title: str, frames: list[int]) -> int | None:
-        """One of ``frames`` (None: cancelled)."""
+    def choose_frame(self, title: str, frames: list[int], *,
+                     suggested: int | None = None) -> int | None:
+        """One of ``frames`` (None: cancelled), ``suggested`` (if one of them) preselected."""
+        first = suggested if suggested in frames else frames[0]
         if frames == list(range(frames[0], frames[0] + len(frames))):
-            value, ok = QInputDialog.getInt(self._parent, title, "Frame:", frames[0], frames[0], frames[-1])
+            value, ok = QInputDialog.getInt(self._parent, title, "Frame:", first, frames[0], frames[-1])
             return value if ok else None
-        item, ok = QInputDialog.getItem(self._parent, title, "Frame:", [str(f) for f in frames], 0, False)
+        item, ok = QInputDialog.getItem(self._parent, title, "Frame:", [str(f) for f in frames],
+                                        frames.index(first), False)
         return int(item) if ok else None
 
     def frame_rate(self, current: float | None) -> float | None:
@@ -179,7 +182,8 @@ class HeadlessAsker(Asker):
     def confirm(self, title: str, message: str) -> bool:
         return False
 
-    def choose_frame(self, title: str, frames: list[int]) -> int | None:
+    def choose_frame(self, title: str, frames: list[int], *,
+                     suggested: int | None = None) -> int | None:
         return None
 
     def frame_rate(self, current: float | None) -> float | None:

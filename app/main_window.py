@@ -12,7 +12,15 @@ from pathlib import Path
 
 from PySide6.QtCore import QPoint, QRect, QSettings, QStandardPaths, Qt
 from PySide6.QtGui import QAction, QKeySequence, QPainter, QPixmap
-from PySide6.QtWidgets import QDockWidget, QMainWindow, QMenu, QSplitter, QWidget
+from PySide6.QtWidgets import (
+    QDockWidget,
+    QFrame,
+    QMainWindow,
+    QMenu,
+    QScrollArea,
+    QSplitter,
+    QWidget,
+)
 
 from app.analysis_controller import AnalysisController
 from app.animation import AnimationController
@@ -37,6 +45,7 @@ from app.widgets.timeline import TimelineWidget
 from app.workers import FrameLoader, JobRunner
 from gaitcore.errors import GaitInputError
 from gaitcore.project.batch import read_summary
+from gaitcore.rig.orient import AXES
 
 APP_NAME = "Gait Studio"
 
@@ -100,8 +109,10 @@ class MainWindow(QMainWindow):
             "timeline": self._dock("Timeline", self.timeline, Qt.DockWidgetArea.BottomDockWidgetArea),
             "animation": self._dock("Animation weights", self.animation_view, Qt.DockWidgetArea.BottomDockWidgetArea),
             "pcs": self._dock("PC1 × PC2 and key-images", self.pc_plot, Qt.DockWidgetArea.RightDockWidgetArea),
-            "diagnosis": self._dock("Diagnosis", self.diagnosis, Qt.DockWidgetArea.RightDockWidgetArea),
-            "posing": self._dock("Posing", self.pose_panel, Qt.DockWidgetArea.LeftDockWidgetArea),
+            "diagnosis": self._dock("Diagnosis", self.diagnosis, Qt.DockWidgetArea.RightDockWidgetArea,
+                                    scroll=True),
+            "posing": self._dock("Posing", self.pose_panel, Qt.DockWidgetArea.LeftDockWidgetArea,
+                                 scroll=True),
             "eigen": self._dock("Eigen-images", self.eigen, Qt.DockWidgetArea.LeftDockWidgetArea),
         }
         self.splitDockWidget(self.docks["timeline"], self.docks["animation"], Qt.Orientation.Vertical)
@@ -121,17 +132,27 @@ class MainWindow(QMainWindow):
         self.state.sourceChanged.connect(self._update_title)
         self.documents.recentChanged.connect(self._fill_recent)
         self.resize(1500, 950)
-        self.resizeDocks([self.docks["posing"], self.docks["pcs"]], [300, 380], Qt.Orientation.Horizontal)
-        self.views.setSizes([500, 500])
+        self.resizeDocks([self.docks["posing"], self.docks["pcs"]], [280, 330], Qt.Orientation.Horizontal)
+        self.views.setSizes([380, 620])  # the rig over the footage gets the larger pane
         self.resizeDocks([self.docks["timeline"], self.docks["animation"]], [70, 170], Qt.Orientation.Vertical)
         self.resizeDocks([self.docks["pcs"], self.docks["diagnosis"]], [360, 300], Qt.Orientation.Vertical)
         if remember_layout:
             self._restore_layout()
         self._update_title()
 
-    def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea) -> QDockWidget:
+    def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea, *,
+              scroll: bool = False) -> QDockWidget:
+        """A dock of ``widget``; with ``scroll`` (docks of text) a dock made small scrolls
+        up and down instead of cutting the text off."""
         dock = QDockWidget(title, self)
         dock.setObjectName(title.split()[0].lower() + "Dock")
+        if scroll:
+            scroller = QScrollArea()
+            scroller.setWidget(widget)
+            scroller.setWidgetResizable(True)
+            scroller.setFrameShape(QFrame.Shape.NoFrame)
+            scroller.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+            widget = scroller
         dock.setWidget(widget)
         self.addDockWidget(area, dock)
         return dock
@@ -168,7 +189,8 @@ class MainWindow(QMainWindow):
         undo = self.state.undo_stack.createUndoAction(self, "&Undo")
         undo.setShortcut(QKeySequence.StandardKey.Undo)
         redo = self.state.undo_stack.createRedoAction(self, "&Redo")
-        redo.setShortcuts([QKeySequence.StandardKey.Redo, QKeySequence("Ctrl+Y")])
+        keys = QKeySequence.keyBindings(QKeySequence.StandardKey.Redo)  # Ctrl+Y on some desktops
+        redo.setShortcuts(keys + [QKeySequence("Ctrl+Y")] * (QKeySequence("Ctrl+Y") not in keys))
         edit.addActions([undo, redo])
 
         play = bar.addMenu("&Playback")
@@ -182,20 +204,7 @@ class MainWindow(QMainWindow):
         self._action(play, "Set &out mark", Qt.Key.Key_O, lambda: set_out_mark(self.state))
         self._action(play, "Set &frame rate...", None, self._ask_frame_rate)
 
-        pose = bar.addMenu("P&ose")
-        posing = self.posing
-        self._action(pose, "&Copy pose", "Ctrl+Shift+C", posing.copy)
-        self._action(pose, "&Paste pose", "Ctrl+Shift+V", posing.paste)
-        self._action(pose, "Paste &mirrored pose", "Ctrl+Shift+M", lambda: posing.paste(mirrored=True))
-        self._action(pose, "M&irror left/right", "Ctrl+M", posing.mirror)
-        self._action(pose, "Pose alternate as mirror of its &key", None, posing.mirror_of_key)
-        self._action(pose, "&Reset pose", None, lambda: posing.reset(joint_only=False))
-        pose.addSeparator()
-        self._action(pose, "Import pose from &CSV...", None, posing.import_csv)
-        self._action(pose, "Import pose from &BVH frame...", None, posing.import_bvh)
-        pose.addSeparator()
-        self._action(pose, "&Load rig from BVH...", None, posing.load_rig)
-        self._action(pose, "Use the &horse template", None, posing.use_template)
+        self._build_pose_menu(bar.addMenu("P&ose"))
 
         tools = bar.addMenu("&Tools")
         tools.addActions(list(self.tools.tool_actions.values()))
@@ -213,6 +222,30 @@ class MainWindow(QMainWindow):
         for dock in self.docks.values():
             view.addAction(dock.toggleViewAction())
         view.addAction(self.tools.toolbar.toggleViewAction())
+
+    def _build_pose_menu(self, pose: QMenu) -> None:
+        posing = self.posing
+        self._action(pose, "&Copy pose", "Ctrl+Alt+C", posing.copy)  # Ctrl+Shift+C: copy strokes
+        self._action(pose, "&Paste pose", "Ctrl+Alt+V", posing.paste)
+        self._action(pose, "Paste &mirrored pose", "Ctrl+Alt+M", lambda: posing.paste(mirrored=True))
+        self._action(pose, "M&irror left/right", "Ctrl+M", posing.mirror)
+        self._action(pose, "Pose alternate as mirror of its &key", None, posing.mirror_of_key)
+        self._action(pose, "&Reset pose", None, lambda: posing.reset(joint_only=False))
+        pose.addSeparator()
+        self._action(pose, "Import pose from &CSV...", None, posing.import_csv)
+        self._action(pose, "Import pose from &BVH frame...", None, posing.import_bvh)
+        pose.addSeparator()
+        self._action(pose, "&Load rig from BVH...", None, posing.load_rig)
+        axes = pose.addMenu("Rig &axes")  # when an imported rig's axes were read wrong
+        for axis in AXES:
+            forward = "+X" if axis[1] != "X" else ("-Y" if axis == "+X" else "+Y")
+            self._action(axes, f"Up is the rig's {axis} as shown", None,
+                         lambda a=axis, f=forward: posing.turn_rig(a, f))
+        axes.addSeparator()
+        for axis in ("+X", "-X", "+Z", "-Z"):
+            self._action(axes, f"Forward is the rig's {axis} as shown", None,
+                         lambda a=axis: posing.turn_rig("+Y", a))
+        self._action(pose, "Use the &horse template", None, posing.use_template)
 
     def _fill_recent(self, files: list[str]) -> None:
         self.recent_menu.clear()

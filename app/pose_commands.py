@@ -12,8 +12,10 @@ from dataclasses import replace
 import numpy as np
 from PySide6.QtGui import QUndoCommand
 
-from app.commands import MergeId, ProjectCommand
+from app.commands import MergeId, ProjectCommand, _FieldCommand
 from app.state import AppState
+from gaitcore.project.document import FootageFit
+from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
 
 
@@ -43,8 +45,31 @@ class SetPoseCommand(ProjectCommand):
 
 
 class SetSkeletonCommand(ProjectCommand):
-    """Pose another rig (None: the horse template) with ``key_poses`` laid out for it."""
+    """Pose another rig (None: the horse template) with ``key_poses`` laid out for it, in
+    ``proportions`` (None: keep the project's)."""
 
     def __init__(self, state: AppState, skeleton: Skeleton | None,
-                 key_poses: Mapping[int, tuple[float, ...]], text: str) -> None:
-        super().__init__(state, replace(state.project, skeleton=skeleton, key_poses=key_poses), text)
+                 key_poses: Mapping[int, tuple[float, ...]], text: str, *,
+                 proportions: RigProportions | None = None) -> None:
+        after = replace(state.project, skeleton=skeleton, key_poses=key_poses,
+                        proportions=proportions or state.project.proportions)
+        super().__init__(state, after, text)
+
+
+class ProportionsCommand(_FieldCommand):
+    """Scale one part of the rig (legs, neck, body, head, tail); a held spin box merges."""
+
+    _ID = MergeId.PROPORTIONS
+
+    def __init__(self, state: AppState, proportions: RigProportions, part: str) -> None:
+        super().__init__(state, replace(state.project, proportions=proportions), part,
+                         f"scale the rig's {part}")
+
+
+class FitRigCommand(ProjectCommand):
+    """The rig's proportions and the footage's placement from a fit, in one step."""
+
+    def __init__(self, state: AppState, proportions: RigProportions, fit: FootageFit,
+                 frame: int) -> None:
+        super().__init__(state, replace(state.project, proportions=proportions, footage_fit=fit),
+                         f"fit the rig to frame {frame}")

@@ -11,6 +11,7 @@ says why.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from itertools import count
 from pathlib import Path
 
@@ -19,14 +20,22 @@ from PySide6.QtCore import QObject, Signal
 from PySide6.QtWidgets import QWidget
 
 from app.dialogs import Asker
-from app.pose_commands import SetPoseCommand, SetSkeletonCommand
+from app.pose_commands import (
+    FitRigCommand,
+    ProportionsCommand,
+    SetPoseCommand,
+    SetSkeletonCommand,
+)
 from app.state import AppState
 from app.workers import Job, JobRunner, ProgressDialog
 from gaitcore.errors import GaitInputError
 from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.pose_table import PoseTable, joints_of, map_channels, read_pose_table
+from gaitcore.project.footage_fit import RigFit, fit_rig
 from gaitcore.project.steps import alternates_in_use, frames_to_pose, missing_poses, read_rig
-from gaitcore.rig.posing import turn_joint
+from gaitcore.rig.orient import reoriented
+from gaitcore.rig.posing import drag_end, effector_chain_top, turn_joint
+from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
 
 
@@ -108,6 +117,21 @@ class PosingController(QObject):
         name = skeleton.joints[joint].name
         self._push(frame, pose, f"rotate {name} on frame {frame}", ("drag", frame, name, self._drag_id))
 
+    def is_draggable_end(self, joint: int) -> bool:
+        """True when dragging ``joint`` moves it by IK (a toe, the head's end, the tail's tip)."""
+        return effector_chain_top(self._state.skeleton, joint) is not None
+
+    def drag_end(self, joint: int, base_pose: np.ndarray, target_xyz: np.ndarray) -> None:
+        """Set the current key's pose to ``base_pose`` with end ``joint`` moved to ``target_xyz``
+        by IK on the chain above it (leg, neck or tail), within the joint limits."""
+        frame = self._require_frame()
+        skeleton = self._state.skeleton
+        pose = drag_end(skeleton, base_pose, joint, target_xyz)
+        if frame is None or pose is None:
+            return
+        name = skeleton.joints[joint].name
+        self._push(frame, pose, f"move {name} on frame {frame}", ("drag", frame, name, self._drag_id))
+
     def set_pose(self, pose: np.ndarray, text: str) -> bool:
         """Replace the current key's whole pose (clamped to the joint limits)."""
         frame = self._require_frame()
@@ -167,6 +191,41 @@ class PosingController(QObject):
         else:
             self._push(frame, skeleton.rest_pose(), f"reset pose on frame {frame}")
 
+    # -- the rig's proportions ----------------------------------------------------------------
+    def set_proportion(self, part: str, scale: float) -> None:
+        """Scale one part of the rig (legs, neck, body, head, tail); one undo step per part."""
+        props = replace(self._state.project.proportions, **{part: float(scale)})
+        if props != self._state.project.proportions:
+            self._state.undo_stack.push(ProportionsCommand(self._state, props, part))
+
+    def fit_rig(self) -> Job | None:
+        """Fit the rig's proportions and the footage's place to this key's silhouette, in the
+        background; one undo step."""
+        frame, project = self._require_frame(), self._state.project
+        if frame is None:
+            return None
+        if project.silhouettes is None:
+            self.messageRaised.emit("no silhouettes yet: segment or sketch the clip first")
+            return None
+        template, pose = self._state.template_skeleton, self.pose_of(frame)
+        start = replace(project.proportions, legs=1.0, neck=1.0, head=1.0, tail=1.0)
+
+        def work(progress) -> RigFit:
+            return fit_rig(template, pose, project.silhouettes, frame, start=start,
+                           flip=project.footage_fit.flip, progress=progress)
+
+        def apply(result: RigFit) -> None:
+            self._state.undo_stack.push(
+                FitRigCommand(self._state, result.proportions, result.footage_fit, frame))
+            m = result.measures
+            self.messageRaised.emit(
+                f"rig fitted to frame {frame} ({100 * m.overlap:.0f}% overlap): body "
+                f"{m.body_length_m:.2f} m, withers {m.withers_height_m:.2f} m, leg "
+                f"{m.leg_length_m:.2f} m; correct the scales if needed")
+
+        return self._start(Job(work, f"Fit the rig to frame {frame}", unit=None), apply,
+                           "Cannot fit the rig")
+
     # -- imports and rigs --------------------------------------------------------------------
     def import_csv(self, path: Path | None = None) -> bool:
         """Pose the current key from a row of a pose CSV (channels matched by name).
@@ -185,18 +244,21 @@ class PosingController(QObject):
                                  lambda p: read_bvh(p)[1], self._bvh_row)
 
     def _csv_row(self, table: PoseTable, path: Path) -> int | None:
+        """One row: that one; more: the artist is asked (the row of the same frame is only
+        suggested: a table's frame numbers need not be the clip's)."""
         frames = [int(f) for f in table.frames]
         if not frames:
             raise GaitInputError("it has no rows")
-        if self._state.frame in frames:
-            return frames.index(self._state.frame)
-        return 0 if len(frames) == 1 else self._choose_row(frames)
+        return 0 if len(frames) == 1 else self._choose_row(path, frames)
 
     def _bvh_row(self, table: PoseTable, path: Path) -> int | None:
         n = len(table.frames)
         if n == 0:
             raise GaitInputError("it has no motion frames")
-        return 0 if n == 1 else self.asker.choose_frame(f"Frame of {path.name}", list(range(n)))
+        frame = self._state.frame if self._state.frame < n else None
+        return 0 if n == 1 else self.asker.choose_frame(
+            f"Which frame of {path.name} poses frame {self._state.frame}?", list(range(n)),
+            suggested=frame)
 
     def _import_pose(self, path: Path | None, title: str, filter_: str,
                      read: Callable[[Path], PoseTable],
@@ -244,27 +306,46 @@ class PosingController(QObject):
             skeleton, note = read
             if note:
                 self.messageRaised.emit(note)
-            self._replace_skeleton(skeleton, f"load rig {skeleton.name}")
+            self._replace_skeleton(skeleton, f"load rig {skeleton.name}", new_rig=True)
 
         self._read(path, read_rig, apply, "Cannot load the rig", "")
         return True
 
+    def turn_rig(self, up: str, forward: str) -> bool:
+        """Turn the rig so that its axis ``up`` (as now shown: "+X" ... "-Z") points up and
+        ``forward`` forward, standing on the ground (when an imported rig's axes were read
+        wrong); the poses are kept."""
+        try:
+            rig = reoriented(self._state.template_skeleton, up=up, forward=forward)
+        except GaitInputError as exc:
+            self.asker.error("Cannot turn the rig", str(exc))
+            return False
+        return self._replace_skeleton(rig, f"turn the rig ({up} up, facing {forward})")
+
     def _read(self, path: Path, read: Callable[[Path], object], then: Callable[[object], None],
-              error_title: str, prefix: str) -> None:
-        """``read(path)`` as a job with a progress dialog; ``then`` gets what it returned,
-        a failure becomes an error dialog (``prefix`` + the message)."""
-        job = Job(lambda progress: read(path), f"Reading {path.name}", unit=None)
+              error_title: str, prefix: str) -> Job:
+        """``read(path)`` as a job (see :meth:`_start`)."""
+        return self._start(Job(lambda progress: read(path), f"Reading {path.name}", unit=None),
+                           then, error_title, prefix)
+
+    def _start(self, job: Job, then: Callable[[object], None], error_title: str,
+               prefix: str = "") -> Job:
+        """Run ``job`` with a progress dialog; ``then`` gets what it returned, a failure
+        becomes an error dialog (``prefix`` + the message)."""
         job.succeeded.connect(then)
         job.failed.connect(lambda message: self.asker.error(error_title, prefix + message))
         window = self.parent()
         ProgressDialog(job, window if isinstance(window, QWidget) else None)
-        self._runner.start(job)
+        return self._runner.start(job)
 
     def use_template(self) -> bool:
         """Go back to the bundled horse template."""
-        return self._replace_skeleton(None, "use the horse template")
+        return self._replace_skeleton(None, "use the horse template", new_rig=True)
 
-    def _replace_skeleton(self, skeleton: Skeleton | None, text: str) -> bool:
+    def _replace_skeleton(self, skeleton: Skeleton | None, text: str, *,
+                          new_rig: bool = False) -> bool:
+        """Pose ``skeleton`` (None: the template) instead; a ``new_rig`` starts from its own
+        proportions (those fitted to the old one do not apply)."""
         from app.state import default_skeleton
 
         project, old = self._state.project, self._state.skeleton
@@ -281,13 +362,18 @@ class PosingController(QObject):
             order = [old.channel_index(c) for c in new.channel_names]
             poses = {f: tuple(np.asarray(p)[order]) for f, p in project.key_poses.items()
                      if len(p) == old.n_channels}
-        self._state.undo_stack.push(SetSkeletonCommand(self._state, skeleton, poses, text))
+        self._state.undo_stack.push(SetSkeletonCommand(
+            self._state, skeleton, poses, text, proportions=RigProportions() if new_rig else None))
         self._state.set_selected_joint("")
         return True
 
     # -- helpers -----------------------------------------------------------------------------
-    def _choose_row(self, frames: list[int]) -> int | None:
-        chosen = self.asker.choose_frame("Which row of the pose table?", frames)
+    def _choose_row(self, path: Path, frames: list[int]) -> int | None:
+        """Ask which row poses the current key (the row of the same frame number, if any, is
+        only suggested: a table's frame numbers need not be the clip's)."""
+        chosen = self.asker.choose_frame(
+            f"Which row of {path.name} poses frame {self._state.frame}?", frames,
+            suggested=self._state.frame if self._state.frame in frames else None)
         return None if chosen is None else frames.index(chosen)
 
     def _apply_import(self, pose: np.ndarray, ignored: list[str], text: str) -> bool:

@@ -16,6 +16,7 @@ from PySide6.QtGui import QUndoStack
 from gaitcore.analysis.analyze import Analysis
 from gaitcore.footage.sources import FrameSource
 from gaitcore.project.document import Project
+from gaitcore.rig.proportions import proportioned
 from gaitcore.rig.skeleton import Skeleton, load_template
 
 DEFAULT_SKELETON = "horse"
@@ -107,7 +108,13 @@ class AppState(QObject):
 
     @property
     def skeleton(self) -> Skeleton:
-        """The rig being posed: the project's, or the bundled horse template."""
+        """The rig being posed and exported: the project's (or the bundled horse template) in
+        the project's proportions (the same object while they do not change)."""
+        return proportioned(self._project.skeleton or default_skeleton(), self._project.proportions)
+
+    @property
+    def template_skeleton(self) -> Skeleton:
+        """The rig being posed before the project's proportions."""
         return self._project.skeleton or default_skeleton()
 
     @property

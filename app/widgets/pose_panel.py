@@ -27,6 +27,7 @@ from PySide6.QtWidgets import (
 
 from app.posing import PosingController
 from app.state import AppState
+from app.widgets.sides import SIDE_RGB, SIDE_WORDS
 from gaitcore.rig.skeleton import CHANNEL_ORDER, Skeleton
 
 ANGLE_RANGE_DEG = 180.0
@@ -151,6 +152,9 @@ class PosePanel(QWidget):
                     continue
                 parent = items.get(joint.parent)
                 item = QTreeWidgetItem([joint.name])
+                if joint.side != "C":  # left and right in the viewport's colours
+                    item.setForeground(0, QColor(*SIDE_RGB[joint.side]))
+                    item.setToolTip(0, f"{joint.name}: {SIDE_WORDS[joint.side]} side")
                 (parent.addChild(item) if parent is not None else self.joints.addTopLevelItem(item))
                 items[joint.name] = item
             if len(items) <= EXPAND_ALL_JOINTS:

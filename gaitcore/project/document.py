@@ -26,6 +26,7 @@ from gaitcore.animation.root_motion import ROOT_MODES
 from gaitcore.errors import GaitInputError
 from gaitcore.io.bone_names import BONE_NAMINGS
 from gaitcore.io.motion import AUTO
+from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
 from gaitcore.silhouettes.annotations import Rect, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
@@ -204,6 +205,9 @@ class Project:
         How the preview and the exports animate the keys.
     footage_fit : FootageFit
         How the footage sits behind the skeleton while posing.
+    proportions : RigProportions
+        Per-part length scales of the rig (legs, neck, body, head, tail): the rig is posed
+        and exported in these proportions (:func:`gaitcore.rig.proportions.proportioned`).
     """
 
     footage: Path | None = None
@@ -220,6 +224,7 @@ class Project:
     skeleton: Skeleton | None = None
     animation: AnimationOptions = field(default_factory=AnimationOptions)
     footage_fit: FootageFit = field(default_factory=FootageFit)
+    proportions: RigProportions = field(default_factory=RigProportions)
 
     def __post_init__(self) -> None:
         if self.footage is not None:

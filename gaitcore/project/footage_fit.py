@@ -7,6 +7,10 @@ centre, paper Section 2.2) lands on the skeleton's centre (area-weighted centre 
 ellipsoids seen from the side); the project's :class:`~gaitcore.project.document.FootageFit` corrects
 that placement (scale about the anchor, shift, mirror). Only the part of the frame around the subject is uploaded,
 shrunk to at most :data:`MAX_TEXTURE_SIDE` pixels.
+
+:func:`fit_rig` does both fits from the key-image's silhouette: the rig's proportions
+(:mod:`gaitcore.rig.silhouette_fit`) and the footage's size and place that put the
+silhouette on the proportioned rig.
 """
 
 from __future__ import annotations
@@ -16,7 +20,11 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from gaitcore.errors import GaitInputError
+from gaitcore.progress import Progress
 from gaitcore.project.document import FootageFit, Silhouettes
+from gaitcore.rig.proportions import RigProportions, proportioned
+from gaitcore.rig.silhouette_fit import ProportionsFit, fit_proportions
 from gaitcore.rig.skeleton import Skeleton
 
 MAX_TEXTURE_SIDE = 512
@@ -89,10 +97,14 @@ class ReferenceImage:
         Indexed (x, y) with y up, as GLImageItem wants it.
     transform : ndarray of shape (4, 4)
         Texel -> gaitcore world (metres).
+    pixel_to_world : ndarray of shape (3, 3)
+        Source pixel (u, v, 1) -> gaitcore world (x, y, z) on the plane, metres, to draw
+        anything measured on the frame (the silhouette's outline) over the footage.
     """
 
     rgba_xy: np.ndarray
     transform: np.ndarray
+    pixel_to_world: np.ndarray
 
 
 def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
@@ -149,7 +161,10 @@ def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
         [0, 0, 1, -(skeleton.depth_m + PLANE_GAP_M)],
         [0, 0, 0, 1.0],
     ])
-    return ReferenceImage(data, transform)
+    pixel_to_world = np.array([[sign * s, 0, X0 - sign * u0 * s],
+                               [0, -s, Y0 + v0 * s],
+                               [0, 0, transform[2, 3]]])
+    return ReferenceImage(data, transform, pixel_to_world)
 
 
 def _anchor(frame: int, skeleton: SkeletonExtent, silhouettes: Silhouettes | None,
@@ -206,3 +221,87 @@ def footage_maps(frames: list[int] | range, skeleton: Skeleton, silhouettes: Sil
     height = silhouette_height_px(silhouettes) if silhouettes is not None else None
     return np.stack([footage_from_world(f, extent, silhouettes, size, fit=fit, height_px=height)
                      for f in frames])
+
+
+def silhouette_outline_px(silhouettes: Silhouettes, frame: int) -> list[np.ndarray]:
+    """Outlines of the silhouette of ``frame`` in source pixels, [] where it is lost.
+
+    Returns
+    -------
+    list of ndarray of shape (n, 2)
+        One closed polyline (x, y) per outer boundary of the mask, first point not repeated.
+    """
+    window = silhouettes.window_xywh(frame) if 0 <= frame < silhouettes.n_frames else None
+    if window is None:
+        return []
+    mask = np.ascontiguousarray(silhouettes.roi.crops[frame], dtype=np.uint8)
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    scale = silhouettes.roi.scale
+    return [np.asarray(window[:2]) + (c[:, 0, :].astype(float) + 0.5) / scale
+            for c in contours if len(c) >= 3]
+
+
+@dataclass(frozen=True)
+class RigFit:
+    """The rig and the footage fitted to one key-image's silhouette.
+
+    Attributes
+    ----------
+    proportions : RigProportions
+    footage_fit : FootageFit
+        Puts the silhouette on the rig in those proportions, in the viewport's placement.
+    measures : ProportionsFit
+        Overlap and the fitted rig's body length, height at the withers and leg length.
+    """
+
+    proportions: RigProportions
+    footage_fit: FootageFit
+    measures: ProportionsFit
+
+
+def fit_rig(template: Skeleton, pose: np.ndarray, silhouettes: Silhouettes, frame: int, *,
+            start: RigProportions = RigProportions(), flip: bool = False,
+            progress: Progress | None = None) -> RigFit:
+    """Fit the rig's part scales and the footage's placement to the silhouette of ``frame``.
+
+    Parameters
+    ----------
+    template : Skeleton
+        The rig before proportions.
+    pose : ndarray of shape (k,)
+        Its pose on ``frame`` (the key's pose, or the rest pose).
+    silhouettes : Silhouettes
+    frame : int
+    start : RigProportions
+        The proportions the search starts from (the body scale is kept: the reference).
+    flip : bool
+        The animal moves to the left in the clip (the footage is mirrored).
+    progress : callable(done, total) -> bool, optional
+
+    Raises
+    ------
+    GaitInputError
+        ``frame`` has no silhouette.
+    """
+    window = silhouettes.window_xywh(frame) if 0 <= frame < silhouettes.n_frames else None
+    height_px = silhouette_height_px(silhouettes)
+    if window is None or not height_px:
+        raise GaitInputError(f"frame {frame} has no silhouette: segment or sketch it, or fit "
+                             "the rig on another key")
+    crop = silhouettes.roi.crops[frame]
+    fit = fit_proportions(crop[:, ::-1] if flip else crop, template, pose, start=start,
+                          progress=progress)
+    rig = proportioned(template, fit.proportions)
+    extent = skeleton_extent(rig)
+    k = silhouettes.roi.scale
+    cx, cy = silhouettes.roi.centers_xy[frame]
+    col, row = (cx - window[0]) * k - 0.5, (cy - window[1]) * k - 0.5  # the anchor in the crop
+    if flip:
+        col = crop.shape[1] - 1 - col
+    anchor = np.array([col - fit.origin_px[0], fit.origin_px[1] - row]) * fit.metres_per_px
+    lift = rig.offsets[0, 1] - template.offsets[0, 1]  # the fit posed the template's root
+    follow = rig.joint_positions(pose)[0, 0] - rig.offsets[0, 0]  # the viewport follows the root
+    footage = FootageFit(scale=fit.metres_per_px * k * height_px / extent.height_m,
+                         offset_x_m=float(anchor[0] - extent.center_xy[0] - follow),
+                         offset_y_m=float(anchor[1] + lift - extent.center_xy[1]), flip=flip)
+    return RigFit(fit.proportions, footage, fit)

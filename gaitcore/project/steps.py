@@ -28,6 +28,7 @@ from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.motion import ExportMotion, export_motion
 from gaitcore.progress import Progress
 from gaitcore.project.document import AnimationOptions, Project, Silhouettes
+from gaitcore.rig.orient import guess_axes, reoriented
 from gaitcore.rig.skeleton import Skeleton
 from gaitcore.silhouettes.segmentation import segment_clip
 from gaitcore.silhouettes.sketch import crop_sketches
@@ -140,6 +141,9 @@ def read_rig(path: Path) -> tuple[Skeleton, str]:
     """A rig from a skeleton JSON or a BVH file, and a note on how it was read ('' if none).
 
     A BVH rig taller than :data:`CENTIMETRE_RIG_M` read as metres is read in centimetres.
+    It is then stood up in Gait Studio's frame (Y up, facing +X, feet on the ground under
+    the origin: :func:`gaitcore.rig.orient.guess_axes`); the note says which axes it had,
+    and when they were ambiguous, what to check.
 
     Raises
     ------
@@ -151,9 +155,18 @@ def read_rig(path: Path) -> tuple[Skeleton, str]:
         return Skeleton.from_json(path), ""
     skeleton = read_bvh(path)[0]
     rest = skeleton.joint_positions(skeleton.rest_pose())
-    if np.ptp(rest[:, 1]) > CENTIMETRE_RIG_M:
-        return read_bvh(path, scale=0.01)[0], f"{path.name}: read in centimetres"
-    return skeleton, ""
+    notes = []
+    if np.ptp(rest, axis=0).max() > CENTIMETRE_RIG_M:
+        skeleton = read_bvh(path, scale=0.01)[0]
+        notes.append("read in centimetres")
+    axes = guess_axes(skeleton)
+    skeleton = reoriented(skeleton, up=axes.up, forward=axes.forward)
+    if (axes.up, axes.forward) != ("+Y", "+X"):
+        notes.append(f"turned from {axes.up} up, facing {axes.forward}")
+    if axes.ambiguous:
+        notes.append(f"its axes are ambiguous ({axes.reason}): check that it stands and faces "
+                     "the direction of travel, or fix it with Pose > Rig axes")
+    return skeleton, f"{path.name}: {', '.join(notes)}" if notes else ""
 
 
 def alternates_in_use(project: Project, analysis: Analysis | None) -> tuple[int, ...]:

@@ -29,6 +29,7 @@ import numpy as np
 from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.errors import GaitInputError
 from gaitcore.project.document import ORIGINS, AnimationOptions, FootageFit, Project, Silhouettes
+from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
 from gaitcore.schema import MAX_FPS, JsonValue, read_json, read_npy
 from gaitcore.silhouettes.annotations import Rect, Stroke
@@ -178,6 +179,7 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
         "silhouettes": sil,
         "animation": asdict(project.animation),
         "footage_fit": asdict(project.footage_fit),
+        "proportions": asdict(project.proportions),
     }
 
 
@@ -203,6 +205,7 @@ def _from_json(doc: JsonValue, p: Path) -> Project:
         skeleton=None if skeleton.is_null() else Skeleton.from_json(skeleton),
         animation=_options(AnimationOptions, doc.key("animation", {})),
         footage_fit=_options(FootageFit, doc.key("footage_fit", {})),
+        proportions=_options(RigProportions, doc.key("proportions", {})),
     )
 
 

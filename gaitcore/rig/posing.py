@@ -1,13 +1,16 @@
-"""Posing a rig by hand: turning one joint about an axis seen in the viewport.
+"""Posing a rig by hand: turning one joint about an axis seen in the viewport, or dragging an
+end (a hoof, the head, the tail's tip) while inverse kinematics sets the joints above it.
 
 The viewport drags a joint about a world axis (the view direction); :func:`turn_joint` turns
-that into the joint's own channels, within its limits.
+that into the joint's own channels, within its limits. Dragging an end effector calls
+:func:`drag_end` with a target in the view's plane.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from gaitcore.rig.ik import solve_chain
 from gaitcore.rig.rotations import euler_zxy_matrix, zxy_from_matrix
 from gaitcore.rig.skeleton import ROTATION_CHANNELS, Skeleton
 
@@ -54,3 +57,80 @@ def turn_joint(skeleton: Skeleton, base_pose: np.ndarray, joint: int, axis: np.n
             i = skeleton.channel_index(c)
             pose[i] = float(np.clip(v, *limits[i]))
     return pose
+
+
+MAX_CHAIN_JOINTS = 8
+"""The longest chain a dragged end moves (a horse's fore leg, scapula to hoof, has 7)."""
+
+
+def effector_chain_top(skeleton: Skeleton, joint: int) -> int | None:
+    """The highest joint an IK drag of ``joint`` may turn, or None when ``joint`` is no end.
+
+    An end effector is a joint without children (a toe, the end of the head or of the tail);
+    its chain goes up through joints that carry only it (no other rotating joint hangs from
+    them), so a drag of a hoof moves its leg up to the scapula or hip, a drag of the head's
+    end moves the neck, never the trunk shared with the other limbs.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    joint : int
+
+    Returns
+    -------
+    int or None
+        Index of the chain's top joint; None for a joint with children or without a
+        rotating joint above it.
+    """
+    parents = skeleton.parents
+    rotating = [bool(j.channels) for j in skeleton.joints]
+    if joint in parents:
+        return None
+    children: dict[int, int] = {}
+    for j, p in enumerate(parents):
+        if p >= 0 and (rotating[j] or j in parents):
+            children[int(p)] = children.get(int(p), 0) + 1
+    top, j, n = None, int(parents[joint]), 0
+    while j >= 0 and n < MAX_CHAIN_JOINTS:
+        if rotating[j]:
+            top, n = j, n + 1
+        p = int(parents[j])
+        if p < 0 or children.get(p, 0) > 1:
+            break
+        j = p
+    return top if top is not None and top != 0 else None
+
+
+def drag_end(skeleton: Skeleton, base_pose: np.ndarray, joint: int,
+             target_xyz: np.ndarray) -> np.ndarray | None:
+    """``base_pose`` with the chain above end effector ``joint`` set so that it reaches
+    ``target_xyz``, within the joint limits (the closest pose when out of reach).
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+    base_pose : ndarray of shape (k,)
+        The pose when the drag started.
+    joint : int
+        An end effector (see :func:`effector_chain_top`).
+    target_xyz : ndarray of shape (3,)
+        World position, metres (the viewport puts it in the view's plane through the joint).
+
+    Returns
+    -------
+    ndarray of shape (k,) or None
+        None when ``joint`` is not an end effector.
+
+    Notes
+    -----
+    The chain is solved by damped least squares (:func:`gaitcore.rig.ik.solve_chain`), which
+    spreads the change over every joint of the leg, neck or tail; on the synthetic canter it
+    came closer to the true joint angles than the two-bone solver (``python -m benchmarks
+    posing``).
+    """
+    top = effector_chain_top(skeleton, joint)
+    if top is None:
+        return None
+    names = skeleton.joint_names
+    return solve_chain(skeleton, base_pose, names[joint], np.asarray(target_xyz, float),
+                       root_joint=names[top]).pose

@@ -67,6 +67,7 @@ class ScriptedAsker(Asker):
         self.confirm_answer = True
         self.chosen_frame: int | None = None
         self.frame_rate_answer: float | None = None
+        self.suggested: int | None = None
         self.asked: list[str] = []
 
     def error(self, title: str, message: str) -> None:
@@ -111,8 +112,10 @@ class ScriptedAsker(Asker):
         self.asked.append("frame rate")
         return self.frame_rate_answer
 
-    def choose_frame(self, title: str, frames: list[int]) -> int | None:
+    def choose_frame(self, title: str, frames: list[int], *,
+                     suggested: int | None = None) -> int | None:
         self.asked.append(title)
+        self.suggested = suggested
         return self.chosen_frame
 
 

@@ -163,3 +163,22 @@ def test_a_rig_with_the_same_channels_keeps_the_poses(qtbot, posed_window, asker
     for name in skeleton.channel_names:  # the BVH lists joints in another order
         assert (window.state.project.key_poses[key][skeleton_bvh.channel_index(name)]
                 == poses[key][skeleton.channel_index(name)])
+
+
+def test_a_table_of_several_rows_always_asks_which_one(posed_window, asker, tmp_path):
+    """Even with a row numbered like the current frame: its numbers need not be the clip's."""
+    window = posed_window
+    skeleton = window.state.skeleton
+    key = window.state.analysis.key_frames[1]
+    wanted = true_poses(skeleton)[[key, key + 5]]
+    write_pose_table(tmp_path / "p.csv", PoseTable(np.array([key, key + 5]),
+                                                   skeleton.channel_names, wanted))
+    window.state.set_frame(key)
+    asker.chosen_frame = key + 5  # the artist means the other row
+    assert window.posing.import_csv(tmp_path / "p.csv")
+    assert f"poses frame {key}" in asker.asked[-1] and asker.suggested == key
+    np.testing.assert_array_equal(window.state.project.key_poses[key], wanted[1])
+    asker.chosen_frame = None  # cancelled: nothing changes
+    project = window.state.project
+    assert not window.posing.import_csv(tmp_path / "p.csv")
+    assert window.state.project is project

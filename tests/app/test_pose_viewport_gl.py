@@ -132,3 +132,175 @@ def test_view_presets_frame_the_whole_skeleton(qtbot, window, posed_key, artifac
         assert np.all((screen > 0) & (screen < (view.width(), view.height()))), name
         view.render_image().save(str(artifacts_dir / f"app_pose_viewport_{name}.png"))
     window.viewport.view_buttons["side"].click()
+
+
+def _widget_pos(view, name: str) -> np.ndarray:
+    skeleton = view._skeleton
+    return view.project(view.joint_positions())[skeleton.joint_index(name)]
+
+
+def test_hovering_highlights_and_names_the_joint(qtbot, window, posed_key):
+    view, viewport = window.viewport.gl_view, window.viewport
+    qtbot.wait(50)
+    for name in ("head", "R_elbow", "L_hind_toe"):
+        x, y = _widget_pos(view, name)
+        qtbot.mouseMove(view, QPoint(round(x), round(y)))
+        qtbot.waitUntil(lambda: view.hovered >= 0)
+        shown = view._skeleton.joint_names[view.hovered]  # legs cross: the nearest one
+        assert np.linalg.norm(_widget_pos(view, shown) - (x, y)) < 1.5
+        assert shown in viewport.hover.text()
+        side = {"L": "left", "R": "right", "C": "centre"}[view._skeleton.joints[view.hovered].side]
+        assert side in viewport.hover.text()
+    assert window.state.selected_joint == ""  # named before any click, nothing selected
+    qtbot.mouseMove(view, QPoint(3, 3))
+    qtbot.waitUntil(lambda: view.hovered == -1)
+    assert viewport.hover.text() == ""
+
+
+def test_drag_a_hoof_moves_the_leg_by_ik_in_one_undo_step(qtbot, window, posed_key):
+    view, state = window.viewport.gl_view, window.state
+    skeleton = state.skeleton
+    qtbot.wait(50)
+    x, y = _widget_pos(view, "L_fore_toe")
+    end = view.pick((x, y))
+    name = skeleton.joint_names[end]
+    assert name.endswith("fore_toe")  # either fore toe: they may overlap on screen
+    before, count = np.array(state.project.key_poses[posed_key]), state.undo_stack.count()
+    qtbot.wait(300)
+    qtbot.mousePress(view, Qt.MouseButton.LeftButton, pos=QPoint(round(x), round(y)))
+    path = [(8, -6), (20, -15), (30, -25)]  # forward and up, as a leg folds in swing
+    for dx, dy in path:
+        qtbot.mouseMove(view, QPoint(round(x + dx), round(y + dy)))
+    qtbot.mouseRelease(view, Qt.MouseButton.LeftButton, pos=QPoint(round(x + 30), round(y - 25)))
+    after = np.array(state.project.key_poses[posed_key])
+    assert state.undo_stack.count() == count + 1  # one drag, one undo step
+    moved = skeleton.joint_positions(after)[end] - skeleton.joint_positions(before)[end]
+    assert moved[0] > 0.05 and moved[1] > 0.05  # forward and up, metres
+    assert abs(moved[2]) < 0.02  # in the view's plane
+    np.testing.assert_allclose(_widget_pos(view, name), (x + 30, y - 25), atol=3.0)
+    changed = {c.rsplit(".", 1)[0] for c, a, b in zip(skeleton.channel_names, after, before)
+               if abs(a - b) > 1e-6}
+    assert changed and all(j.startswith(name[:2]) for j in changed)  # that leg only
+    limits = skeleton.limits_array()
+    assert np.all((after >= limits[:, 0] - 1e-9) & (after <= limits[:, 1] + 1e-9))
+    state.undo_stack.undo()
+    np.testing.assert_array_equal(state.project.key_poses[posed_key], before)
+
+
+def _wheel(view, xy, delta: int) -> None:
+    from PySide6.QtCore import QPointF
+    from PySide6.QtGui import QWheelEvent
+    from PySide6.QtWidgets import QApplication
+
+    pos = QPointF(*xy)
+    event = QWheelEvent(pos, view.mapToGlobal(pos), QPoint(0, 0), QPoint(0, delta),
+                        Qt.MouseButton.NoButton, Qt.KeyboardModifier.NoModifier,
+                        Qt.ScrollPhase.NoScrollPhase, False)
+    QApplication.sendEvent(view, event)
+
+
+def test_wheel_zooms_to_the_cursor_and_f_frames_the_rig(qtbot, window, posed_key, artifacts_dir):
+    view = window.viewport.gl_view
+    qtbot.wait(50)
+    head = _widget_pos(view, "head")
+    distance = view.opts["distance"]
+    _wheel(view, head, 600)  # zoom in a lot, on the head
+    assert view.opts["distance"] < 0.6 * distance
+    np.testing.assert_allclose(_widget_pos(view, "head"), head, atol=4.0)  # stays put
+    screen = view.project(view.joint_positions())
+    assert not np.all((screen > 0) & (screen < (view.width(), view.height())))  # cut off
+    view.requestActivate()
+    qtbot.keyClick(view, Qt.Key.Key_F)
+    screen = view.project(view.joint_positions())
+    size = np.array([view.width(), view.height()])
+    assert np.all((screen > 0) & (screen < size))  # all of it in view ...
+    assert (np.ptp(screen, axis=0) / size).max() > 0.7  # ... and filling it
+    view.render_image().save(str(artifacts_dir / "app_pose_viewport_framed.png"))
+
+
+def test_footage_shows_through_bones_left_and_right_in_their_colours(qtbot, window, posed_key,
+                                                                     artifacts_dir):
+    from app.widgets.sides import SIDE_RGB
+
+    view, viewport, skeleton = window.viewport.gl_view, window.viewport, window.state.skeleton
+    qtbot.wait(100)
+    # inside the trunk, away from the stick figure's lines and dots
+    a, b = _widget_pos(view, "spine1"), _widget_pos(view, "spine2")
+    inside = (a + b) / 2 + (0, 10)
+
+    def trunk(footage: bool, opacity: int) -> np.ndarray:
+        viewport.footage.setChecked(footage)
+        viewport.bones.setValue(opacity)
+        return pixel_at(view, framebuffer(view), inside)
+
+    assert np.abs(trunk(True, 35) - trunk(False, 35)).sum() > 40  # seen through the bones
+    np.testing.assert_array_equal(trunk(True, 100), trunk(False, 100))  # solid hides it
+    viewport.bones.setValue(35)
+    viewport.footage.setChecked(True)
+    rgb = framebuffer(view)
+    view.render_image().save(str(artifacts_dir / "app_pose_viewport_sides.png"))
+    window.snapshot().save(str(artifacts_dir / "app_pose_viewport_sides_window.png"))
+    screen = view.project(view.joint_positions())
+    matches = {"L": 0, "R": 0}
+    for j, joint in enumerate(skeleton.joints):
+        if joint.side in matches:
+            got = pixel_at(view, rgb, screen[j])
+            matches[joint.side] += np.abs(got - SIDE_RGB[joint.side]).sum() < 60
+    assert min(matches.values()) >= 5, matches  # the joints not hidden by the other leg
+    tree = window.pose_panel.joints
+    item = tree.findItems("L_elbow", Qt.MatchFlag.MatchExactly | Qt.MatchFlag.MatchRecursive)[0]
+    assert item.foreground(0).color().getRgb()[:3] == SIDE_RGB["L"]
+
+
+def test_a_z_up_centimetre_quadruped_loads_standing_in_view_at_the_footage_scale(
+        qtbot, window, posed_key, asker, tmp_path, artifacts_dir):
+    from gaitcore.project.footage_fit import skeleton_extent
+    from gaitcore.rig.skeleton import Skeleton
+    from tests.gaitcore.test_orient import written_as
+
+    doc = window.state.skeleton.to_dict()  # a dog-sized quadruped
+    for joint in doc["joints"]:
+        joint["offset"] = [0.45 * v for v in joint["offset"]]
+    dog = Skeleton.from_json(dict(doc, name="dog"))
+    written_as(dog, tmp_path / "dog.bvh", up="+Z", forward="-Y", unit_m=0.01,
+               root_at=(470.0, 20.0, 0.0))  # 4.7 m to the side, as a real file had it
+    assert window.posing.load_rig(tmp_path / "dog.bvh")
+    assert "centimetres" in window.statusBar().currentMessage()
+    state, view, viewport = window.state, window.viewport.gl_view, window.viewport
+    rig = state.skeleton
+    rest = rig.joint_positions(rig.rest_pose())
+    assert rest[:, 1].min() == pytest.approx(0.0, abs=1e-6)  # on the ground ...
+    assert np.ptp(rest[:, 1]) == pytest.approx(0.45 * 1.9, rel=0.1)  # ... in metres, upright
+    head, root = rest[rig.joint_index("head")], rest[0]
+    assert head[0] > root[0] and abs(root[2]) < 1e-9  # facing +X, not off to the side
+    qtbot.waitUntil(lambda: viewport._ref is not None and viewport._skeleton is rig)
+    qtbot.wait(100)
+    screen = view.project(view.joint_positions())
+    assert np.all((screen > 0) & (screen < (view.width(), view.height())))  # framed
+    outline = np.concatenate(viewport._outline_world)  # the animal in the footage ...
+    extent = skeleton_extent(rig)
+    assert np.ptp(outline[:, 1]) == pytest.approx(extent.height_m, rel=0.15)  # ... at its size
+    view.render_image().save(str(artifacts_dir / "app_pose_viewport_dog_rig.png"))
+
+
+def test_onion_skin_shows_the_neighbouring_keys_on_the_same_root(qtbot, window, posed_key,
+                                                                 artifacts_dir):
+    state, view, viewport = window.state, window.viewport.gl_view, window.viewport
+    truth = true_poses(state.skeleton)
+    keys = state.analysis.key_frames
+    for k in keys:
+        state.set_frame(k)
+        window.posing.set_pose(truth[k], "set pose")
+    state.set_frame(posed_key)
+    qtbot.waitUntil(lambda: window.frame_view.shown_frame == posed_key)
+    qtbot.wait(150)
+    shown = [item for item in view.onion if item.visible()]
+    assert len(shown) == 2  # the key before and the key after
+    root_x = view.joint_positions()[0, 0]
+    for item in shown:
+        pos = item.pos.reshape(-1, 2, 3)
+        first_child = pos[0]  # pairs start with (root, its first child)
+        assert first_child[0, 0] == pytest.approx(root_x)
+    view.render_image().save(str(artifacts_dir / "app_pose_viewport_onion.png"))
+    viewport.onion.setChecked(False)
+    assert not any(item.visible() for item in view.onion)

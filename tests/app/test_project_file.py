@@ -21,6 +21,7 @@ from gaitcore.project.storage import (
     save_project,
     sidecar_dir,
 )
+from gaitcore.rig.proportions import RigProportions
 from gaitcore.silhouettes.annotations import Rect, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
 
@@ -40,6 +41,7 @@ def make_project(footage) -> Project:
         silhouettes=Silhouettes(roi, "segmented"),
         animation=AnimationOptions(filtered=True, loop=True),
         footage_fit=FootageFit(scale=1.25, offset_x_m=-0.1, offset_y_m=0.05, flip=True),
+        proportions=RigProportions(legs=1.15, neck=0.85, tail=0.9),
     )
 
 
@@ -344,3 +346,16 @@ def test_too_many_strokes_are_refused_with_the_limit(tmp_path):
     path.write_text(json.dumps(doc))
     with pytest.raises(GaitInputError, match=f"strokes must be a list of 0 to {MAX_STROKES}"):
         load_project(path)
+
+
+def test_rig_proportions_default_for_older_files_and_are_checked(tmp_path):
+    save_project(Project(proportions=RigProportions(legs=1.1)), tmp_path / "p.gaitproj")
+    doc = json.loads((tmp_path / "p.gaitproj").read_text())
+    assert doc["proportions"]["legs"] == 1.1
+    del doc["proportions"]  # saved before proportions existed
+    (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
+    assert load_project(tmp_path / "p.gaitproj").proportions == RigProportions()
+    doc["proportions"] = {"neck": 0.0}
+    (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
+    with pytest.raises(GaitInputError, match="damaged"):
+        load_project(tmp_path / "p.gaitproj")

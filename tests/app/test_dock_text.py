@@ -1,0 +1,32 @@
+"""Every dock's text can be read: labels get the height their wrapped text needs (a dock too
+small for them scrolls instead of cutting them off)."""
+
+from __future__ import annotations
+
+from PySide6.QtWidgets import QLabel, QScrollArea
+
+from tests.app.posing_helpers import open_demo
+
+
+def cut_labels(window) -> list[str]:
+    cut = []
+    for name, dock in window.docks.items():
+        if not dock.isVisible():
+            continue
+        for label in dock.findChildren(QLabel):
+            if not label.isVisible() or not label.text() or not label.wordWrap():
+                continue
+            need = label.heightForWidth(label.width())
+            if label.height() < need - 1:
+                cut.append(f"{name}: {label.text()[:40]!r} ({label.height()} < {need} px)")
+    return cut
+
+
+def test_no_dock_cuts_its_text_off(qtbot, window, canter_clip, artifacts_dir):
+    open_demo(qtbot, window, canter_clip)
+    window.resize(1200, 760)  # a laptop screen: the docks get small
+    qtbot.wait(200)
+    assert not cut_labels(window), cut_labels(window)
+    diagnosis = window.docks["diagnosis"].widget()
+    assert isinstance(diagnosis, QScrollArea)
+    window.snapshot().save(str(artifacts_dir / "app_docks_small_window.png"))
