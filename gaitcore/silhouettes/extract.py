@@ -6,7 +6,7 @@ images) is segmented from rectangles drawn on its first frame (paper Section 2.2
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import cv2
@@ -15,7 +15,8 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 from gaitcore.footage.image_folder import iter_mask_folder, list_image_files
 from gaitcore.progress import Progress
-from gaitcore.silhouettes.annotations import Rect
+from gaitcore.silhouettes.annotations import Rect, Scribble
+from gaitcore.silhouettes.roto import FrameState
 from gaitcore.silhouettes.tracking import RoiClip, crop_rois
 
 
@@ -49,8 +50,12 @@ def load_silhouettes(
     *,
     subject: Sequence[Rect] = (),
     background: Sequence[Rect] = (),
+    box: Rect | None = None,
+    scribbles: Sequence[Scribble] = (),
+    method: str | None = None,
     max_side: int | None = 160,
     progress: Progress | None = None,
+    state_sink: Callable[[int, FrameState], None] | None = None,
 ) -> RoiClip:
     """Tracked, fixed-size silhouettes of the subject in every frame of ``source``.
 
@@ -61,11 +66,19 @@ def load_silhouettes(
     out_dir : Path
         For colour footage, the computed masks are written to ``out_dir/masks/00000.png``...
     subject, background : sequence of Rect
-        Rectangles on the first frame, required for colour footage.
+        Rectangles on the first frame (colour footage needs them or ``box``).
+    box : Rect, optional
+        Around the subject on the first frame.
+    scribbles : sequence of Scribble
+        Corrective strokes on any frames.
+    method : {"propagate", "gmm"}, optional
+        Segmentation method (see :mod:`gaitcore.silhouettes.segmentation`).
     max_side : int or None
         Longer side of the ROI crops (they are shrunk to it), which bounds memory on long
         clips; None keeps the source resolution.
     progress : callable(done, total) -> bool, optional
+    state_sink : callable(frame, FrameState), optional
+        Receives what the segmentation says of each frame of colour footage.
 
     Raises
     ------
@@ -77,10 +90,10 @@ def load_silhouettes(
         raise GaitInputError(f"{source} does not exist: give a video file, an image folder or a mask folder")
     if is_mask_folder(source):
         return crop_rois(iter_mask_folder(source), max_side=max_side, progress=progress)
-    if not subject or not background:
+    if box is None and not (subject and background):
         raise GaitInputError(
-            f"{source} is colour footage: give at least one --subject and one --background "
-            "rectangle x,y,w,h drawn on its first frame (or pass a folder of binary masks)"
+            f"{source} is colour footage: give a --box x,y,w,h around the subject on its first "
+            "frame, or --subject and --background rectangles (or pass a folder of binary masks)"
         )
     from gaitcore.footage.sources import open_frames
     from gaitcore.silhouettes.segmentation import segment_clip
@@ -92,5 +105,7 @@ def load_silhouettes(
         cv2.imwrite(str(mask_dir / f"{index:05d}.png"), mask)
 
     with open_frames(source) as frames:
-        return segment_clip(frames, list(subject), list(background), progress=progress,
-                            mask_sink=write_mask, max_side=max_side)
+        return segment_clip(frames, list(subject), list(background), box=box,
+                            scribbles=scribbles, method=method, progress=progress,
+                            mask_sink=write_mask,
+                            state_sink=state_sink, max_side=max_side)

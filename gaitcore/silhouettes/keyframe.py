@@ -92,7 +92,8 @@ def cut_first(small: np.ndarray, box: Box | None, *, residual: np.ndarray | None
         The subject's box (working size): everything outside is background.
     residual : ndarray of shape (rows, cols), optional
         From :func:`motion_residual`: inside the box, pixels that move unlike the camera
-        start as "probably subject", the others as "probably background".
+        start as "probably subject", the others as "probably background" (kept only when
+        the result spans the box; otherwise the whole box starts as "probably subject").
     subject, background : ndarray of shape (rows, cols), bool, optional
         Sure subject and sure background (rectangles, strokes).
     settings : PropagationSettings
@@ -102,19 +103,32 @@ def cut_first(small: np.ndarray, box: Box | None, *, residual: np.ndarray | None
     ndarray of shape (rows, cols), uint8
         0/1 mask: the components touching the sure subject (or the largest one).
     """
+    moving = None
+    if box is not None and residual is not None:
+        x, y, w, h = box
+        inside = np.zeros(small.shape[:2], bool)
+        inside[y : y + h, x : x + w] = True
+        moving = _moving(residual, inside)
+    if moving is not None:
+        mask = _cut_labels(small, box, moving, subject, background, settings)
+        if _spans(mask, box):
+            return mask
+    return _cut_labels(small, box, None, subject, background, settings)
+
+
+def _cut_labels(small: np.ndarray, box: Box | None, moving: np.ndarray | None,
+                subject: np.ndarray | None, background: np.ndarray | None,
+                settings: PropagationSettings) -> np.ndarray:
+    """GrabCut of a first frame from its labels; the components touching the sure subject
+    (or the largest one)."""
     rows, cols = small.shape[:2]
     labels = np.full((rows, cols), cv2.GC_PR_BGD, np.uint8)
     if box is not None:
         x, y, w, h = box
         labels[:] = cv2.GC_BGD
-        labels[y : y + h, x : x + w] = cv2.GC_PR_FGD
-        if residual is not None:
-            inside = np.zeros((rows, cols), bool)
-            inside[y : y + h, x : x + w] = True
-            moving = _moving(residual, inside)
-            if moving is not None:
-                labels[inside] = cv2.GC_PR_BGD
-                labels[moving] = cv2.GC_PR_FGD
+        labels[y : y + h, x : x + w] = cv2.GC_PR_BGD if moving is not None else cv2.GC_PR_FGD
+    if moving is not None:
+        labels[moving] = cv2.GC_PR_FGD
     if background is not None:
         labels[background] = cv2.GC_BGD
     if subject is not None:
@@ -127,6 +141,14 @@ def cut_first(small: np.ndarray, box: Box | None, *, residual: np.ndarray | None
             return mask
         anchor = comp == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     return keep_touching(mask, anchor)
+
+
+def _spans(mask: np.ndarray, box: Box, least: float = 0.6) -> bool:
+    """Whether the mask spans at least ``least`` of the box both ways: a box is drawn around
+    the whole subject, so a cut that fills only a corner of it (e.g. the sky between a
+    horse's legs, where separate photographs made everything move) took the wrong thing."""
+    _, _, w, h = cv2.boundingRect(mask)
+    return w >= least * box[2] and h >= least * box[3]
 
 
 def _moving(residual: np.ndarray, inside: np.ndarray) -> np.ndarray | None:
