@@ -80,7 +80,8 @@ def motion_residual(first: np.ndarray, later: list[np.ndarray], box: Box) -> np.
 
 
 def cut_first(small: np.ndarray, box: Box | None, *, residual: np.ndarray | None = None,
-              subject: np.ndarray | None = None, background: np.ndarray | None = None,
+              seed: np.ndarray | None = None, subject: np.ndarray | None = None,
+              background: np.ndarray | None = None,
               settings: PropagationSettings) -> np.ndarray:
     """Cut a key frame with no previous mask: from a box, strokes or rectangles.
 
@@ -94,6 +95,9 @@ def cut_first(small: np.ndarray, box: Box | None, *, residual: np.ndarray | None
         From :func:`motion_residual`: inside the box, pixels that move unlike the camera
         start as "probably subject", the others as "probably background" (kept only when
         the result spans the box; otherwise the whole box starts as "probably subject").
+    seed : ndarray of shape (rows, cols), bool, optional
+        Instead of ``residual``: the pixels of the box that start as "probably subject"
+        (e.g. the paper's colour model's guess), under the same check.
     subject, background : ndarray of shape (rows, cols), bool, optional
         Sure subject and sure background (rectangles, strokes).
     settings : PropagationSettings
@@ -103,8 +107,8 @@ def cut_first(small: np.ndarray, box: Box | None, *, residual: np.ndarray | None
     ndarray of shape (rows, cols), uint8
         0/1 mask: the components touching the sure subject (or the largest one).
     """
-    moving = None
-    if box is not None and residual is not None:
+    moving = None if seed is None or box is None or not seed.any() else seed
+    if box is not None and residual is not None and moving is None:
         x, y, w, h = box
         inside = np.zeros(small.shape[:2], bool)
         inside[y : y + h, x : x + w] = True

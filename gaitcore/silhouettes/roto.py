@@ -261,10 +261,10 @@ class RotoSegmentation:
             rects_bg = self.work.shrink_mask(rect_mask(frame.shape, self.background_rects,
                                                        "background"))
         box = None if self.box is None else self.work.box(self.box.as_tuple())
+        residual = seed = None
         if box is None and self.subject_rects and self.background_rects:
-            box = self._box_from_rects(small, rects_fg, rects_bg)
-        residual = None
-        if box is not None and self.s.motion_offsets:
+            box, seed = self._box_from_rects(small, rects_fg, rects_bg)
+        elif box is not None and self.s.motion_offsets:
             later = [self.work.shrink(check_frame(self.source[k]))
                      for k in self.s.motion_offsets if k < self.n]
             residual = motion_residual(small, later, box) if later else None
@@ -272,12 +272,13 @@ class RotoSegmentation:
         bg = _union(background, rects_bg)
         if fg is not None and bg is not None:
             bg &= ~fg
-        return cut_first(small, box, residual=residual, subject=fg, background=bg,
+        return cut_first(small, box, residual=residual, seed=seed, subject=fg, background=bg,
                          settings=self.s)
 
     def _box_from_rects(self, small: np.ndarray, fg: np.ndarray, bg: np.ndarray):
-        """The paper's rectangles as a box: the subject-coloured components (paper 2.2's
-        mixture model) under the subject rectangles, their bounding box grown by a tenth."""
+        """The paper's rectangles as a box and a seed: the subject-coloured components (paper
+        2.2's mixture model) under the subject rectangles, and their bounding box grown by a
+        tenth."""
         model = ColourModel.fit(small, [_scaled(r, self.work.scale) for r in self.subject_rects],
                                 [_scaled(r, self.work.scale) for r in self.background_rects])
         guess = ((model.posterior(small) > 127) & ~bg) | fg
@@ -287,7 +288,7 @@ class RotoSegmentation:
         pad_x, pad_y = round(0.1 * w) + 2, round(0.1 * h) + 2
         x0, y0 = max(0, x - pad_x), max(0, y - pad_y)
         return (x0, y0, min(small.shape[1], x + w + pad_x) - x0,
-                min(small.shape[0], y + h + pad_y) - y0)
+                min(small.shape[0], y + h + pad_y) - y0), guess > 0
 
     def _key_cut(self, t: int, prior: np.ndarray) -> Cut:
         """Cut a corrected frame: its strokes are sure labels, and the prior around them takes
