@@ -69,7 +69,7 @@ class PropagationSettings:
         side).
     """
 
-    subject_side_px: int = 160
+    subject_side_px: int = 200
     flow_preset: str = "fast"
     band_frac: float = 0.08
     core_frac: float = 0.04
