@@ -141,17 +141,20 @@ def test_segment_command_writes_masks_and_states(tmp_path, capsys):
     assert all(0 <= f["confidence"] <= 1 and f["lost"] is False for f in data["frames"])
 
 
-@pytest.mark.parametrize(("args", "match"), [
-    (["--box", "500,500,10,10"], "outside"),
-    (["--box", "10,10,0,5"], "empty"),
-    (["--scribbles", "SCRIBBLES"], "frame 40"),
-    ([], "give a --box"),
+@pytest.mark.parametrize(("args", "scribbles", "match"), [
+    (["--box", "500,500,10,10"], "", "outside"),
+    (["--box", "10,10,0,5"], "", "empty"),
+    (["--scribbles", "SCRIBBLES"], '{"scribbles": [{"frame": 40, "label": "subject", '
+     '"points": [[40, 50]]}]}', "frame 40"),
+    (["--scribbles", "SCRIBBLES"], '{"scribbles": [{"frame": 1, "label": "leg", '
+     '"points": [[40, 50]]}]}', "label 'leg'"),
+    (["--scribbles", "SCRIBBLES"], '{"scribbles": [', "not a readable scribbles file"),
+    ([], "", "give a --box"),
 ])
-def test_segment_command_bad_input(tmp_path, capsys, args, match):
+def test_segment_command_bad_input(tmp_path, capsys, args, scribbles, match):
     frames, _ = scene(3)
     clip = _write_clip(tmp_path / "clip", frames)
-    (tmp_path / "s.json").write_text(json.dumps({"scribbles": [
-        {"frame": 40, "label": "subject", "width": 4, "points": [[40, 50]]}]}))
+    (tmp_path / "s.json").write_text(scribbles)
     args = [str(tmp_path / "s.json") if a == "SCRIBBLES" else a for a in args]
     if "--box" not in args:
         args += ["--box", "10,30,60,40"] if args else []
