@@ -137,7 +137,14 @@ def _cut_labels(small: np.ndarray, box: Box | None, moving: np.ndarray | None,
         labels[background] = cv2.GC_BGD
     if subject is not None:
         labels[subject] = cv2.GC_FGD
-    mask = _grabcut(small, labels, settings.first_iters)
+    mask = np.zeros((rows, cols), np.uint8)
+    if box is None:
+        mask[:] = _grabcut(small, labels, settings.first_iters)
+    else:  # the background's colours are learnt near the box: a small box in a big frame
+        x, y, w, h = box  # would otherwise compare the subject with the whole landscape
+        grow = max(w, h) // 2 + 8
+        win = (slice(max(0, y - grow), y + h + grow), slice(max(0, x - grow), x + w + grow))
+        mask[win] = _grabcut(small[win], np.ascontiguousarray(labels[win]), settings.first_iters)
     anchor = subject if subject is not None and subject.any() else None
     if anchor is None:
         n, comp, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)

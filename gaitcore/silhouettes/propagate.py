@@ -83,7 +83,7 @@ class PropagationSettings:
     prior_blur_frac: float = 0.03
     smooth_frac: float = 0.02
     first_scale: float = 1.5
-    stroke_reach: float = 3.0
+    stroke_reach: float = 2.0
 
     def __post_init__(self) -> None:
         if self.flow_preset not in _PRESETS:

@@ -160,3 +160,22 @@ def test_segment_command_bad_input(tmp_path, capsys, args, scribbles, match):
         args += ["--box", "10,30,60,40"] if args else []
     assert main(["segment", str(clip), "--out", str(tmp_path / "out"), *args]) == 2
     assert match in _error_line(capsys)
+
+
+def test_a_small_animal_in_a_large_frame_keeps_its_detail():
+    """The working size follows the subject's box, not the frame: the scene pasted into 8 x 8
+    times larger grass is segmented as well as the original."""
+    frames, truth = scene(8)
+    rng = np.random.default_rng(5)
+    rows, cols, y0, x0 = 8 * truth.shape[1], 8 * truth.shape[2], 400, 500
+    texture = cv2.GaussianBlur(rng.normal(0, 25, (rows, cols)).astype(np.float32), (0, 0), 2)
+    grass = np.clip(np.array([50, 140, 70], np.float32) + texture[..., None] * [1, 1.5, 1],
+                    0, 255).astype(np.uint8)
+    big = np.repeat(grass[None], len(frames), axis=0)
+    big[:, y0 : y0 + truth.shape[1], x0 : x0 + truth.shape[2]] = frames
+    big_truth = np.zeros(big.shape[:3], bool)
+    big_truth[:, y0 : y0 + truth.shape[1], x0 : x0 + truth.shape[2]] = truth
+    seg = RotoSegmentation(big, box=padded_box(big_truth[0]))
+    seg.run()
+    assert seg.work.scale == 1.0
+    assert min(iou(seg.mask(t), big_truth[t]) for t in range(len(big))) >= 0.85
