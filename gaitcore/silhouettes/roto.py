@@ -80,11 +80,6 @@ class _PackedMasks:
         mask[y : y + h, x : x + w] = np.unpackbits(bits, count=w * h).reshape(h, w)
         return Cut(mask, conf)
 
-    def copy(self) -> _PackedMasks:
-        out = _PackedMasks(self.shape)
-        out._items = dict(self._items)
-        return out
-
 
 class RotoSegmentation:
     """Silhouettes of a whole clip, propagated from key frames both ways.
@@ -131,7 +126,7 @@ class RotoSegmentation:
         self.background_rects = [r.clipped_to(cols, rows) for r in background_rects]
         check_scribbles(scribbles, self.n, (rows, cols))
         self.scribbles: tuple[Scribble, ...] = tuple(scribbles)
-        side = self._subject_side(first)
+        side = self._subject_side()
         self.work = WorkingSize.for_subject((rows, cols), side, self.s)
         self.fwd = _PackedMasks(self.work.wh[::-1])
         self.bwd = _PackedMasks(self.work.wh[::-1])
@@ -152,7 +147,7 @@ class RotoSegmentation:
             When ``progress`` returned False.
         """
         self.keys.clear()
-        self.fwd, self.bwd = self.fwd.__class__(self.fwd.shape), self.bwd.__class__(self.bwd.shape)
+        self.fwd, self.bwd = _PackedMasks(self.fwd.shape), _PackedMasks(self.bwd.shape)
         key_frames = sorted({0} | set(self.corrected_frames))
         done = [0]
         total = self.n + sum(b - a for a, b in zip(key_frames, key_frames[1:]))
@@ -194,10 +189,6 @@ class RotoSegmentation:
             lo, hi = min(lo, k if prev is None else prev + 1), max(hi, nxt)
         return lo, hi
 
-    def small_mask(self, t: int) -> np.ndarray:
-        """Frame ``t``'s silhouette at the working size, (rows, cols) uint8 0/1."""
-        return self._final(t)
-
     def mask(self, t: int) -> np.ndarray:
         """Frame ``t``'s silhouette at the source size, (rows, cols) bool."""
         return self.work.enlarge(self._final(t))
@@ -208,14 +199,15 @@ class RotoSegmentation:
         if t in self.keys:
             area, conf = float(self.keys[t].mask.sum()), 1.0
         else:
-            a, b = self._neighbours(t)
+            _, b = self._neighbours(t)
             cuts = [c for c in (self.fwd.get(t), self.bwd.get(t) if b < self.n else None) if c]
             conf = float(np.mean([c.confidence for c in cuts])) if cuts else 0.0
             area = float(self._final(t).sum())
         return FrameState(area < self.s.lost_frac * self.key_area, corrected, round(conf, 3))
 
     # -- key frames -------------------------------------------------------------------------
-    def _subject_side(self, first: np.ndarray) -> float:
+    def _subject_side(self) -> float:
+        """The subject's longer side in source pixels, as far as frame 0's input tells."""
         boxes = ([self.box] if self.box else []) + list(self.subject_rects)
         if self.box is not None:
             return float(max(self.box.w, self.box.h))

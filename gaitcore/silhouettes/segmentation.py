@@ -168,30 +168,46 @@ def segment_clip(
         s = replace(s, method=method)
     subject_rects = [r if isinstance(r, Rect) else Rect(*r) for r in subject_rects]
     background_rects = [r if isinstance(r, Rect) else Rect(*r) for r in background_rects]
-    acc = RoiAccumulator()
     if s.method == "gmm":
         if box is not None or scribbles:
             raise GaitInputError("the paper's 'gmm' method takes subject and background "
                                  "rectangles only: drop --box and --scribbles, or use "
                                  "'propagate'")
-        total = len(source) if hasattr(source, "__len__") else 0
-        for t, (frame, found) in enumerate(_gmm_masks(_stream(source), subject_rects,
-                                                      background_rects, s)):
-            _collect(acc, found, frame.shape[:2], t, mask_sink)
-            report(progress, t + 1, max(total, t + 1), "segmentation cancelled")
-        if not len(acc):
-            raise GaitInputError("the clip has no frames: choose another file or frame range")
-        return acc.finish(margin=margin, max_side=max_side)
-    seg = RotoSegmentation(source, box=None if box is None else
-                           (box if isinstance(box, Rect) else Rect(*box)),
-                           subject_rects=subject_rects, background_rects=background_rects,
-                           scribbles=scribbles, settings=s.propagation)
-    seg.run(progress)
+        acc = _segment_gmm(source, subject_rects, background_rects, s, progress, mask_sink)
+    else:
+        seg = RotoSegmentation(source, box=None if box is None else
+                               (box if isinstance(box, Rect) else Rect(*box)),
+                               subject_rects=subject_rects, background_rects=background_rects,
+                               scribbles=scribbles, settings=s.propagation)
+        seg.run(progress)
+        acc = _collect_roto(seg, mask_sink, state_sink)
+    return acc.finish(margin=margin, max_side=max_side)
+
+
+def _segment_gmm(source, subject_rects, background_rects, s: SegmentationSettings,
+                 progress: Progress | None, mask_sink: MaskSink | None) -> RoiAccumulator:
+    """The paper's method over the clip, one frame at a time."""
+    acc = RoiAccumulator()
+    total = len(source) if hasattr(source, "__len__") else 0
+    for t, (frame, found) in enumerate(_gmm_masks(_stream(source), subject_rects,
+                                                  background_rects, s)):
+        _collect(acc, found, frame.shape[:2], t, mask_sink)
+        report(progress, t + 1, max(total, t + 1), "segmentation cancelled")
+    if not len(acc):
+        raise GaitInputError("the clip has no frames: choose another file or frame range")
+    return acc
+
+
+def _collect_roto(seg: RotoSegmentation, mask_sink: MaskSink | None,
+                  state_sink: Callable[[int, FrameState], None] | None) -> RoiAccumulator:
+    """Every frame's mask of a finished propagation, all its components (legs may come
+    apart), into the ROI accumulator and the sinks."""
+    acc = RoiAccumulator()
     for t in range(seg.n):
         mask = seg.mask(t)
         state = seg.state(t)
         found = None
-        if not state.lost and mask.any():  # every component: legs may come apart
+        if not state.lost and mask.any():
             x, y, w, h = cv2.boundingRect(mask.astype(np.uint8))
             m = cv2.moments(mask.astype(np.uint8), binaryImage=True)
             found = (mask[y : y + h, x : x + w], np.array([x, y, w, h]),
@@ -199,7 +215,7 @@ def segment_clip(
         _collect(acc, found, mask.shape, t, mask_sink)
         if state_sink is not None:
             state_sink(t, state)
-    return acc.finish(margin=margin, max_side=max_side)
+    return acc
 
 
 def _stream(source) -> Iterable[np.ndarray]:
