@@ -16,6 +16,7 @@ from pathlib import Path
 
 from gaitcore.bench import synth_command
 from gaitcore.errors import GaitInputError
+from gaitcore.io import segment_command
 from gaitcore.progress import Cancelled
 from gaitcore.project import batch_command
 from gaitcore.schema import MAX_FPS
@@ -34,26 +35,6 @@ class _Parser(argparse.ArgumentParser):
 
     def error(self, message: str) -> None:  # noqa: D102 - argparse API
         raise GaitInputError(f"{self.prog}: {message} (see '{self.prog} --help')")
-
-
-MAX_PIXELS = 1 << 20
-
-
-def _rect(text: str):
-    from gaitcore.silhouettes.annotations import Rect
-
-    try:
-        values = [float(v) for v in text.split(",")]
-        if len(values) != 4 or not all(abs(v) <= MAX_PIXELS for v in values):
-            raise ValueError
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a rectangle x,y,w,h in pixels "
-                                         f"(four numbers within +-{MAX_PIXELS})") from None
-    x, y, w, h = (int(round(v)) for v in values)
-    try:
-        return Rect(x, y, w, h)
-    except GaitInputError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def _frame_list(text: str) -> tuple[int, ...]:
@@ -105,10 +86,7 @@ def _add_analyze(sub) -> None:
     p.add_argument("--pcs", type=int, default=2, help="principal components used (default 2)")
     p.add_argument("--keys", type=int, default=4, help="key-images to select (default 4)")
     p.add_argument("--switching", action="store_true", help="propose alternates for walks")
-    p.add_argument("--subject", type=_rect, action="append", default=[], metavar="X,Y,W,H",
-                   help="rectangle on the subject in the first frame (repeatable)")
-    p.add_argument("--background", type=_rect, action="append", default=[], metavar="X,Y,W,H",
-                   help="rectangle on the background in the first frame (repeatable)")
+    segment_command.add_segmentation_options(p)
     p.add_argument("--pin", type=_frame_list, default=(), metavar="F,F",
                    help="frames that must be key-images")
     p.add_argument("--forbid", type=_frame_list, default=(), metavar="F,F",
@@ -140,8 +118,15 @@ def _run_analyze(args: argparse.Namespace) -> int:
         stabilize_roi=not args.paper_roi,
     )
     fps = _clip_fps(args)
-    roi = load_silhouettes(args.input, args.out, subject=args.subject, background=args.background,
-                           max_side=settings.max_side_px, start=args.start, stop=args.stop)
+    states: dict = {}
+    roi = load_silhouettes(args.input, args.out, max_side=settings.max_side_px,
+                           start=args.start, stop=args.stop, state_sink=states.__setitem__,
+                           **segment_command.segmentation_options(args))
+    if states:
+        from gaitcore.io.scribbles import write_segmentation_json
+
+        write_segmentation_json(args.out / "segmentation.json",
+                                [states[t] for t in sorted(states)], source=str(args.input))
     silhouettes = Silhouettes(roi, "masks" if is_mask_folder(args.input) else "segmented")
     analysis = analyze(silhouettes, settings, first_frame=args.start)
     write_analysis_json(args.out / "analysis.json", analysis, source=str(args.input), fps=fps)
@@ -361,6 +346,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_analyze(sub)
     _add_animate(sub)
     synth_command.add_parser(sub)
+    segment_command.add_parser(sub)
     _add_evaluate(sub)
     batch_command.add_parser(sub)
     return parser

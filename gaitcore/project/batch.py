@@ -16,10 +16,9 @@ when complete, so a clip folder is either whole or absent. A clip that cannot be
 error. The summary of the whole batch (``summary.csv`` and ``summary.json``) is a list of
 :class:`ClipSummary` rows, in manifest order.
 
-The box of a manifest row stands, for now, for subject and background rectangles
-(:func:`box_rectangles`); the one-box segmentation of issue #11 replaces that mapping, and
-the cycle finder of issue #12 fills ``cycle_start``/``cycle_stop`` (today: the whole
-analysed range).
+A manifest row's box drives the one-box segmentation; the clip's project also keeps it as
+subject and background rectangles (:func:`box_rectangles`), so that the app can segment it
+again. ``cycle_start``/``cycle_stop`` are the best stretch the cycle finder ranks.
 """
 
 from __future__ import annotations
@@ -321,7 +320,7 @@ def _silhouettes(spec: ClipSpec, project: Project):
     with open_source(project) as source:  # checks the footage
         if is_mask_folder(spec.path):
             return silhouettes_from_masks(spec.path)
-        return segment(source, project)
+        return segment(source, project, box=spec.box)
 
 
 def _done(spec: ClipSpec, analysis: Analysis) -> ClipSummary:

@@ -30,6 +30,7 @@ from gaitcore.progress import Progress
 from gaitcore.project.document import AnimationOptions, Project, Silhouettes
 from gaitcore.rig.orient import guess_axes, reoriented
 from gaitcore.rig.skeleton import Skeleton
+from gaitcore.silhouettes.annotations import Rect
 from gaitcore.silhouettes.segmentation import segment_clip
 from gaitcore.silhouettes.sketch import crop_sketches
 from gaitcore.silhouettes.tracking import WORK_SIDE_PX, crop_rois
@@ -81,19 +82,22 @@ def silhouettes_from_masks(folder: Path, progress: Progress | None = None, *,
 
 
 def segment(source: FrameSource, project: Project, progress: Progress | None = None, *,
+            box: Rect | None = None,
             mask_sink: Callable[[int, np.ndarray], None] | None = None) -> Silhouettes:
-    """Segment the whole clip from the project's rectangles (paper Section 2.2).
+    """Segment the whole clip from a box around the animal on the first frame, or from the
+    project's rectangles (paper Section 2.2).
 
     Raises
     ------
     GaitInputError
-        No subject or no background rectangle, or no subject found.
+        No box and not a subject and a background rectangle, or no subject found.
     """
-    if not project.subject_rects or not project.background_rects:
-        raise GaitInputError("draw at least one subject and one background rectangle on the "
-                             "first frame, then segment again")
-    roi = segment_clip(source, project.subject_rects, project.background_rects,
-                       progress=progress, mask_sink=mask_sink, max_side=WORK_SIDE_PX)
+    if box is None and not (project.subject_rects and project.background_rects):
+        raise GaitInputError("draw a box around the animal, or at least one subject and one "
+                             "background rectangle, on the first frame, then segment again")
+    rects = () if box is not None else (project.subject_rects, project.background_rects)
+    roi = segment_clip(source, *rects, box=box, progress=progress, mask_sink=mask_sink,
+                       max_side=WORK_SIDE_PX)
     return Silhouettes(roi, "segmented")
 
 

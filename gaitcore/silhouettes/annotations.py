@@ -165,3 +165,43 @@ class Stroke:
     def moved(self, points_xy: np.ndarray, frame: int | None = None) -> Stroke:
         """A copy with new points (and optionally another frame), same width."""
         return Stroke(points_xy, self.width_px, self.frame if frame is None else frame)
+
+
+SCRIBBLE_LABELS = ("subject", "background")
+
+
+@dataclass(frozen=True, eq=False)
+class Scribble(Stroke):
+    """A corrective stroke: "this is the subject" or "this is background" on one frame.
+
+    Attributes
+    ----------
+    label : {"subject", "background"}
+        What the pixels under the stroke are; the graph cut of that frame takes them as hard
+        labels (beyond the paper's Section 2.2, after After Effects' Roto Brush).
+
+    Raises
+    ------
+    GaitInputError
+        As :class:`Stroke`, and for an unknown label.
+    """
+
+    label: str = "subject"
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.label not in SCRIBBLE_LABELS:
+            raise GaitInputError(f"unknown scribble label {self.label!r}: use 'subject' or "
+                                 "'background'")
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Scribble):
+            return NotImplemented
+        return self.label == other.label and Stroke.__eq__(self, other)
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def moved(self, points_xy: np.ndarray, frame: int | None = None) -> Scribble:
+        """A copy with new points (and optionally another frame), same width and label."""
+        return Scribble(points_xy, self.width_px, self.frame if frame is None else frame,
+                        self.label)

@@ -21,17 +21,25 @@ _COV_REG = 4.0  # added to covariance diagonals (Lab units squared): JPEG noise,
 
 
 @lru_cache(maxsize=4)
+def bin_centres_bgr(bits: int) -> np.ndarray:
+    """BGR centres of the colour bins of :func:`bin_index`, shape (2**(3*bits), 3), float64."""
+    step = 1 << (8 - bits)
+    c = np.arange(1 << bits) * step + step // 2
+    out = np.stack(np.meshgrid(c, c, c, indexing="ij"), -1).reshape(-1, 3).astype(np.float64)
+    out.flags.writeable = False
+    return out
+
+
+@lru_cache(maxsize=4)
 def _bin_lab(bits: int) -> np.ndarray:
     """Lab coordinates of the centres of the BGR bins, shape (2**(3*bits), 3), float64."""
-    step = 1 << (8 - bits)
-    c = (np.arange(1 << bits) * step + step // 2).astype(np.uint8)
-    bgr = np.stack(np.meshgrid(c, c, c, indexing="ij"), -1).reshape(-1, 1, 3)
+    bgr = bin_centres_bgr(bits).astype(np.uint8).reshape(-1, 1, 3)
     lab = cv2.cvtColor(bgr, cv2.COLOR_BGR2Lab).reshape(-1, 3).astype(np.float64)
     lab.flags.writeable = False
     return lab
 
 
-def _bin_index(image: np.ndarray, bits: int) -> np.ndarray:
+def bin_index(image: np.ndarray, bits: int) -> np.ndarray:
     """Flat bin index of every pixel of a BGR uint8 image, shape (rows, cols), intp."""
     q = image >> (8 - bits)
     return (q[..., 0].astype(np.intp) << 2 * bits) | (q[..., 1].astype(np.intp) << bits) | q[..., 2]
@@ -178,11 +186,11 @@ class ColourModel:
 
     def posterior(self, image_bgr: np.ndarray) -> np.ndarray:
         """Probability of "subject" per pixel times 255, shape (rows, cols), uint8."""
-        return self.lut[_bin_index(image_bgr, self.bits)]
+        return self.lut[bin_index(image_bgr, self.bits)]
 
 
 def _histogram(image: np.ndarray, mask: np.ndarray, bits: int) -> np.ndarray:
-    h = np.bincount(_bin_index(image[mask], bits).ravel(), minlength=1 << 3 * bits).astype(float)
+    h = np.bincount(bin_index(image[mask], bits).ravel(), minlength=1 << 3 * bits).astype(float)
     return h / max(h.sum(), 1.0)
 
 
@@ -218,3 +226,66 @@ def rect_mask(shape: tuple[int, ...], rects: Sequence[Rect | tuple], what: str) 
         rect = r if isinstance(r, Rect) else Rect(*r)
         out[rect.clipped_to(cols, rows).slices()] = True
     return out
+
+
+@dataclass(frozen=True, eq=False)
+class ColourTable:
+    """Log-likelihood ratio, subject against background, of every quantized BGR colour.
+
+    Attributes
+    ----------
+    llr : ndarray of shape (2**(3*bits),), float32
+        Clipped to [-8, 8].
+    bits : int
+        Bits kept per BGR channel.
+    """
+
+    llr: np.ndarray
+    bits: int = 5
+
+    def __call__(self, image: np.ndarray) -> np.ndarray:
+        """The ratio of every pixel of a BGR uint8 image, shape (rows, cols), float32."""
+        return self.llr[bin_index(image, self.bits)]
+
+
+def learn_colours(image: np.ndarray, mask: np.ndarray) -> ColourTable | None:
+    """The colour mixtures of a frame whose silhouette is known, tabulated.
+
+    Parameters
+    ----------
+    image : ndarray of shape (h, w, 3), uint8
+    mask : ndarray of shape (h, w), uint8 0/1
+
+    Returns
+    -------
+    ColourTable, or None when either side has fewer than 16 pixels.
+
+    Notes
+    -----
+    The mixtures are the graph cut's own (five Gaussians per side in BGR, learnt by
+    ``cv2.grabCut`` from the mask as sure labels).
+    """
+    if min(int(mask.sum()), int(mask.size - mask.sum())) < 16:
+        return None
+    labels = np.where(mask > 0, cv2.GC_FGD, cv2.GC_BGD).astype(np.uint8)
+    bgd, fgd = np.zeros((1, 65)), np.zeros((1, 65))
+    cv2.setRNGSeed(0)
+    cv2.grabCut(np.ascontiguousarray(image), labels, None, bgd, fgd, 1, cv2.GC_INIT_WITH_MASK)
+    centres = bin_centres_bgr(6)
+    llr = _mixture_loglik(fgd, centres) - _mixture_loglik(bgd, centres)
+    return ColourTable(np.clip(llr, -8, 8).astype(np.float32), 6)
+
+
+def _mixture_loglik(model: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Log density of ``cv2.grabCut``'s mixture (weights 5, means 5x3, covariances 5x9) at
+    points ``x`` (m, 3)."""
+    m = model.ravel()
+    weights, means, covs = m[:5], m[5:20].reshape(5, 3), m[20:65].reshape(5, 3, 3)
+    terms = np.full((5, x.shape[0]), -np.inf)
+    for k in np.nonzero(weights > 0)[0]:
+        cov = covs[k] + np.eye(3) * 1e-3
+        d = x - means[k]
+        q = np.einsum("ni,ij,nj->n", d, np.linalg.inv(cov), d)
+        terms[k] = np.log(weights[k]) - 0.5 * np.log(np.linalg.det(cov)) - 0.5 * q
+    top = terms.max(axis=0)
+    return top + np.log(np.exp(terms - top).sum(axis=0))

@@ -7,7 +7,8 @@ images) is segmented from rectangles drawn on its first frame (paper Section 2.2
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
@@ -16,7 +17,8 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 from gaitcore.footage.image_folder import iter_mask_folder, list_image_files
 from gaitcore.progress import Progress
-from gaitcore.silhouettes.annotations import Rect
+from gaitcore.silhouettes.annotations import Rect, Scribble
+from gaitcore.silhouettes.roto import FrameState
 from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiClip, crop_rois
 
 
@@ -50,10 +52,14 @@ def load_silhouettes(
     *,
     subject: Sequence[Rect] = (),
     background: Sequence[Rect] = (),
+    box: Rect | None = None,
+    scribbles: Sequence[Scribble] = (),
+    method: str | None = None,
     max_side: int | None = WORK_SIDE_PX,
     start: int = 0,
     stop: int | None = None,
     progress: Progress | None = None,
+    state_sink: Callable[[int, FrameState], None] | None = None,
 ) -> RoiClip:
     """Tracked, fixed-size silhouettes of the subject in frames ``start <= f < stop`` of ``source``.
 
@@ -65,13 +71,21 @@ def load_silhouettes(
         For colour footage, the computed masks are written to ``out_dir/masks/00000.png``...,
         named by source frame.
     subject, background : sequence of Rect
-        Rectangles on the first frame (of the range), required for colour footage.
+        Rectangles on the first frame of the range (colour footage needs them or ``box``).
+    box : Rect, optional
+        Around the subject on the first frame of the range.
+    scribbles : sequence of Scribble
+        Corrective strokes on any frames (source frame numbers).
+    method : {"propagate", "gmm"}, optional
+        Segmentation method (see :mod:`gaitcore.silhouettes.segmentation`).
     max_side : int or None
         Longer side of the ROI crops (they are shrunk to it), which bounds memory on long
         clips; None keeps the source resolution.
     start, stop : int
         Source frames to read (``stop=None``: to the end).
     progress : callable(done, total) -> bool, optional
+    state_sink : callable(frame, FrameState), optional
+        Receives what the segmentation says of each frame of colour footage.
 
     Raises
     ------
@@ -89,10 +103,10 @@ def load_silhouettes(
                                  f"choose 0 <= start < stop <= {n}")
         masks = itertools.islice(iter_mask_folder(source), start, last)
         return crop_rois(masks, max_side=max_side, progress=progress)
-    if not subject or not background:
+    if box is None and not (subject and background):
         raise GaitInputError(
-            f"{source} is colour footage: give at least one --subject and one --background "
-            "rectangle x,y,w,h drawn on its first frame (or pass a folder of binary masks)"
+            f"{source} is colour footage: give a --box x,y,w,h around the subject on its first "
+            "frame, or --subject and --background rectangles (or pass a folder of binary masks)"
         )
     from gaitcore.footage.sources import open_frames
     from gaitcore.silhouettes.segmentation import segment_clip
@@ -103,6 +117,11 @@ def load_silhouettes(
     def write_mask(index: int, mask: np.ndarray) -> None:
         cv2.imwrite(str(mask_dir / f"{start + index:05d}.png"), mask)
 
+    if start:  # the clip starts at the range: scribbles are numbered by source frame
+        scribbles = [replace(s, frame=s.frame - start) for s in scribbles
+                     if start <= s.frame < (stop if stop is not None else s.frame + 1)]
     with open_frames(source, start=start, stop=stop) as frames:
-        return segment_clip(frames, list(subject), list(background), progress=progress,
-                            mask_sink=write_mask, max_side=max_side)
+        return segment_clip(frames, list(subject), list(background), box=box,
+                            scribbles=scribbles, method=method, progress=progress,
+                            mask_sink=write_mask,
+                            state_sink=state_sink, max_side=max_side)

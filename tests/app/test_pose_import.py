@@ -165,7 +165,7 @@ def test_a_rig_with_the_same_channels_keeps_the_poses(qtbot, posed_window, asker
                 == poses[key][skeleton.channel_index(name)])
 
 
-def test_a_table_of_several_rows_always_asks_which_one(posed_window, asker, tmp_path):
+def test_a_table_of_several_rows_always_asks_which_one(qtbot, posed_window, asker, tmp_path):
     """Even with a row numbered like the current frame: its numbers need not be the clip's."""
     window = posed_window
     skeleton = window.state.skeleton
@@ -175,10 +175,12 @@ def test_a_table_of_several_rows_always_asks_which_one(posed_window, asker, tmp_
                                                    skeleton.channel_names, wanted))
     window.state.set_frame(key)
     asker.chosen_frame = key + 5  # the artist means the other row
-    assert window.posing.import_csv(tmp_path / "p.csv")
+    assert window.posing.import_csv(tmp_path / "p.csv")  # read as a job
+    wait_jobs(qtbot, window)
     assert f"poses frame {key}" in asker.asked[-1] and asker.suggested == key
     np.testing.assert_array_equal(window.state.project.key_poses[key], wanted[1])
     asker.chosen_frame = None  # cancelled: nothing changes
     project = window.state.project
-    assert not window.posing.import_csv(tmp_path / "p.csv")
+    window.posing.import_csv(tmp_path / "p.csv")
+    wait_jobs(qtbot, window)
     assert window.state.project is project

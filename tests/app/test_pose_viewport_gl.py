@@ -10,6 +10,7 @@ import pytest
 from PySide6.QtCore import QPoint, Qt
 from PySide6.QtGui import QImage
 
+from tests.app.conftest import wait_jobs
 from tests.app.posing_helpers import open_demo, true_poses
 
 pytestmark = pytest.mark.gl
@@ -264,7 +265,8 @@ def test_a_z_up_centimetre_quadruped_loads_standing_in_view_at_the_footage_scale
     dog = Skeleton.from_json(dict(doc, name="dog"))
     written_as(dog, tmp_path / "dog.bvh", up="+Z", forward="-Y", unit_m=0.01,
                root_at=(470.0, 20.0, 0.0))  # 4.7 m to the side, as a real file had it
-    assert window.posing.load_rig(tmp_path / "dog.bvh")
+    assert window.posing.load_rig(tmp_path / "dog.bvh")  # read as a job
+    wait_jobs(qtbot, window)
     assert "centimetres" in window.statusBar().currentMessage()
     state, view, viewport = window.state, window.viewport.gl_view, window.viewport
     rig = state.skeleton

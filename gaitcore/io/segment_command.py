@@ -1,0 +1,94 @@
+"""The ``gaitcore segment`` subcommand, and the segmentation options ``analyze`` shares.
+
+``gaitcore segment INPUT --out DIR [--box X,Y,W,H] [--subject X,Y,W,H]...
+[--background X,Y,W,H]... [--scribbles FILE.json]`` writes ``DIR/masks/00000.png``... (full
+frame, 0/255, one per source frame) and ``DIR/segmentation.json`` (per frame: lost,
+corrected, confidence).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from gaitcore.errors import GaitInputError
+from gaitcore.silhouettes.annotations import Rect
+
+MAX_PIXELS = 1 << 20
+"""Largest coordinate a rectangle may have, in pixels."""
+
+
+def _rect(text: str) -> Rect:
+    try:
+        values = [float(v) for v in text.split(",")]
+        if len(values) != 4 or not all(abs(v) <= MAX_PIXELS for v in values):
+            raise ValueError
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a rectangle x,y,w,h in pixels "
+                                         f"(four numbers within +-{MAX_PIXELS})") from None
+    x, y, w, h = (int(round(v)) for v in values)
+    try:
+        return Rect(x, y, w, h)
+    except GaitInputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_segmentation_options(p: argparse.ArgumentParser) -> None:
+    """``--box``, ``--subject``, ``--background``, ``--scribbles`` and ``--method``."""
+    p.add_argument("--box", type=_rect, default=None, metavar="X,Y,W,H",
+                   help="box around the whole subject on the first frame")
+    p.add_argument("--subject", type=_rect, action="append", default=[], metavar="X,Y,W,H",
+                   help="rectangle on the subject in the first frame (repeatable)")
+    p.add_argument("--background", type=_rect, action="append", default=[], metavar="X,Y,W,H",
+                   help="rectangle on the background in the first frame (repeatable)")
+    p.add_argument("--scribbles", type=Path, default=None, metavar="FILE.json",
+                   help="corrective strokes on any frames: {\"scribbles\": [{\"frame\": 12, "
+                   "\"label\": \"subject\", \"width\": 8, \"points\": [[x, y], ...]}]}")
+    p.add_argument("--method", choices=("propagate", "gmm"), default="propagate",
+                   help="propagate (default: optical flow from the box, corrections both "
+                   "ways) or gmm (the paper's colour mixture, rectangles only)")
+
+
+def segmentation_options(args: argparse.Namespace) -> dict:
+    """The keyword options of ``load_silhouettes`` given on the command line."""
+    from gaitcore.io.scribbles import read_scribbles
+
+    scribbles = [] if args.scribbles is None else read_scribbles(args.scribbles)
+    return {"subject": args.subject, "background": args.background, "box": args.box,
+            "scribbles": scribbles, "method": args.method}
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    """Register ``segment`` on an argparse subparsers object."""
+    p = subparsers.add_parser(
+        "segment",
+        help="silhouettes of a clip from one box, with corrective strokes",
+        description="Segment the subject in every frame of a video or image folder and write "
+        "the full-frame masks and what is known of each frame (lost, corrected, confidence).",
+    )
+    p.add_argument("input", type=Path, help="video file or image folder")
+    p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
+    add_segmentation_options(p)
+    p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``gaitcore segment``; returns the exit status."""
+    from gaitcore.io.scribbles import write_segmentation_json
+    from gaitcore.silhouettes.extract import is_mask_folder, load_silhouettes
+    from gaitcore.silhouettes.tracking import WORK_SIDE_PX
+
+    if Path(args.input).is_dir() and is_mask_folder(Path(args.input)):
+        raise GaitInputError(f"{args.input} already holds binary masks: nothing to segment")
+    states: dict = {}
+    roi = load_silhouettes(args.input, args.out, max_side=WORK_SIDE_PX,
+                           state_sink=states.__setitem__, **segmentation_options(args))
+    ordered = [states[t] for t in range(len(roi.lost))] if states else []
+    if ordered:
+        write_segmentation_json(args.out / "segmentation.json", ordered, source=str(args.input))
+    lost = int(roi.lost.sum())
+    corrected = sum(st.corrected for st in ordered)
+    print(f"frames: {len(roi.lost)} (subject lost in {lost}, corrected {corrected})")
+    print(f"wrote {args.out / 'masks'}" + (f" and {args.out / 'segmentation.json'}"
+                                           if ordered else ""))
+    return 0

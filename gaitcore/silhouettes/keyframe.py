@@ -1,0 +1,228 @@
+"""Cuts of key frames: the first frame from a box (or the paper's rectangles), and any frame
+an artist corrects with strokes (beyond the paper's Section 2.2).
+
+Both are ``cv2.grabCut`` (Rother et al. 2004) at the working size of
+:mod:`gaitcore.silhouettes.propagate`. On the first frame, when the camera's own motion can be
+explained (one or two homographies fitted to the optical flow outside the box), pixels in the
+box that move differently seed the subject's colour model: this is what separates a pale dog
+from pale grass.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from gaitcore.silhouettes.propagate import Box, Cut, PropagationSettings, disk, keep_touching
+
+
+def _grabcut(image: np.ndarray, labels: np.ndarray, iters: int) -> np.ndarray:
+    """``cv2.grabCut`` from a label image, seeded so results never depend on OpenCV's RNG
+    state; returns the 0/1 subject mask (labels are updated in place)."""
+    fg = (labels == cv2.GC_FGD) | (labels == cv2.GC_PR_FGD)
+    if min(int(fg.sum()), int(fg.size - fg.sum())) < 16:
+        return fg.astype(np.uint8)
+    cv2.setRNGSeed(0)
+    cv2.grabCut(np.ascontiguousarray(image), labels, None, np.zeros((1, 65)),
+                np.zeros((1, 65)), iters, cv2.GC_INIT_WITH_MASK)
+    return ((labels == cv2.GC_FGD) | (labels == cv2.GC_PR_FGD)).astype(np.uint8)
+
+
+def motion_residual(first: np.ndarray, later: list[np.ndarray], box: Box) -> np.ndarray | None:
+    """How differently each pixel of ``first`` moves from the camera, in working pixels.
+
+    Parameters
+    ----------
+    first : ndarray of shape (rows, cols, 3), uint8
+        The first frame at the working size.
+    later : list of ndarray of shape (rows, cols, 3), uint8
+        A few following frames.
+    box : (x, y, w, h)
+        The subject's box at the working size: the camera's motion is fitted outside it.
+
+    Returns
+    -------
+    ndarray of shape (rows, cols), float32, or None
+        Median over ``later`` of the distance between the optical flow and the flow of the
+        best of (up to) two homographies fitted by RANSAC outside the box (a far and a near
+        plane of the scene); None when the camera's motion cannot be fitted.
+    """
+    grey = cv2.cvtColor(first, cv2.COLOR_BGR2GRAY)
+    rows, cols = grey.shape
+    x, y, w, h = box
+    outside = np.ones((rows, cols), bool)
+    outside[y : y + h, x : x + w] = False
+    ys, xs = np.mgrid[0:rows:4, 0:cols:4]
+    sel = outside[ys, xs]
+    if sel.sum() < 64:
+        return None
+    gy, gx = np.mgrid[0:rows, 0:cols].astype(np.float32)
+    grid = np.dstack([gx, gy])
+    flow_of = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM)
+    residuals = []
+    for frame in later:
+        flow = flow_of.calc(grey, cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), None)
+        src = np.stack([xs[sel], ys[sel]], -1).astype(np.float32)
+        dst = src + flow[ys[sel], xs[sel]]
+        best = np.full((rows, cols), np.inf, np.float32)
+        for _ in range(2):
+            if len(src) < 32:
+                break
+            hom, inliers = cv2.findHomography(src, dst, cv2.RANSAC, 1.0)
+            if hom is None or inliers.sum() < 0.15 * sel.sum():
+                break
+            moved = cv2.perspectiveTransform(grid.reshape(-1, 1, 2), hom).reshape(rows, cols, 2)
+            best = np.minimum(best, np.linalg.norm(flow - (moved - grid), axis=-1))
+            src, dst = src[inliers.ravel() == 0], dst[inliers.ravel() == 0]
+        if np.isfinite(best).all():
+            residuals.append(best)
+    return np.median(residuals, axis=0) if residuals else None
+
+
+def cut_first(small: np.ndarray, box: Box | None, *, residual: np.ndarray | None = None,
+              seed: np.ndarray | None = None, subject: np.ndarray | None = None,
+              background: np.ndarray | None = None,
+              settings: PropagationSettings) -> np.ndarray:
+    """Cut a key frame with no previous mask: from a box, strokes or rectangles.
+
+    Parameters
+    ----------
+    small : ndarray of shape (rows, cols, 3), uint8
+        The frame at the working size.
+    box : (x, y, w, h) or None
+        The subject's box (working size): everything outside is background.
+    residual : ndarray of shape (rows, cols), optional
+        From :func:`motion_residual`: inside the box, pixels that move unlike the camera
+        start as "probably subject", the others as "probably background" (kept only when
+        the result spans the box; otherwise the whole box starts as "probably subject").
+    seed : ndarray of shape (rows, cols), bool, optional
+        Instead of ``residual``: the pixels of the box that start as "probably subject"
+        (e.g. the paper's colour model's guess), under the same check.
+    subject, background : ndarray of shape (rows, cols), bool, optional
+        Sure subject and sure background (rectangles, strokes).
+    settings : PropagationSettings
+
+    Returns
+    -------
+    ndarray of shape (rows, cols), uint8
+        0/1 mask: the components touching the sure subject (or the largest one).
+    """
+    moving = None if seed is None or box is None or not seed.any() else seed
+    if box is not None and residual is not None and moving is None:
+        x, y, w, h = box
+        inside = np.zeros(small.shape[:2], bool)
+        inside[y : y + h, x : x + w] = True
+        moving = _moving(residual, inside)
+    if moving is not None:
+        mask = _cut_labels(small, box, moving, subject, background, settings)
+        if _spans(mask, box):
+            return mask
+    return _cut_labels(small, box, None, subject, background, settings)
+
+
+def _cut_labels(small: np.ndarray, box: Box | None, moving: np.ndarray | None,
+                subject: np.ndarray | None, background: np.ndarray | None,
+                settings: PropagationSettings) -> np.ndarray:
+    """GrabCut of a first frame from its labels; the components touching the sure subject
+    (or the largest one)."""
+    rows, cols = small.shape[:2]
+    labels = np.full((rows, cols), cv2.GC_PR_BGD, np.uint8)
+    if box is not None:
+        x, y, w, h = box
+        labels[:] = cv2.GC_BGD
+        labels[y : y + h, x : x + w] = cv2.GC_PR_BGD if moving is not None else cv2.GC_PR_FGD
+    if moving is not None:
+        labels[moving] = cv2.GC_PR_FGD
+    if background is not None:
+        labels[background] = cv2.GC_BGD
+    if subject is not None:
+        labels[subject] = cv2.GC_FGD
+    mask = np.zeros((rows, cols), np.uint8)
+    if box is None:
+        mask[:] = _grabcut(small, labels, settings.first_iters)
+    else:  # the background's colours are learnt near the box: a small box in a big frame
+        x, y, w, h = box  # would otherwise compare the subject with the whole landscape
+        grow = max(w, h) // 2 + 8
+        win = (slice(max(0, y - grow), y + h + grow), slice(max(0, x - grow), x + w + grow))
+        mask[win] = _grabcut(small[win], np.ascontiguousarray(labels[win]), settings.first_iters)
+    anchor = subject if subject is not None and subject.any() else None
+    if anchor is None:
+        n, comp, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+        if n <= 1:
+            return mask
+        anchor = comp == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    return keep_touching(mask, anchor)
+
+
+def _spans(mask: np.ndarray, box: Box, least: float = 0.6) -> bool:
+    """Whether the mask spans at least ``least`` of the box both ways: a box is drawn around
+    the whole subject, so a cut that fills only a corner of it (e.g. the sky between a
+    horse's legs, where separate photographs made everything move) took the wrong thing."""
+    _, _, w, h = cv2.boundingRect(mask)
+    return w >= least * box[2] and h >= least * box[3]
+
+
+def _moving(residual: np.ndarray, inside: np.ndarray) -> np.ndarray | None:
+    """Pixels in the box that move unlike the camera (Otsu's threshold of the residual in the
+    box, at least half a pixel); None when that is under 5% or over 90% of the box."""
+    values = residual[inside]
+    top = float(values.max())
+    if top <= 0.5:
+        return None
+    scaled = np.clip(values / top * 255, 0, 255).astype(np.uint8)
+    otsu, _ = cv2.threshold(scaled, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
+    moving = (residual > max(0.5, otsu / 255 * top)) & inside
+    share = moving.sum() / max(inside.sum(), 1)
+    return moving if 0.05 <= share <= 0.9 else None
+
+
+def cut_with_prior(small: np.ndarray, prior: np.ndarray, *, subject: np.ndarray | None = None,
+                   background: np.ndarray | None = None, iters: int,
+                   settings: PropagationSettings) -> Cut:
+    """Graph cut of one window around a prior mask (warped, or the current result when an
+    artist corrects a frame).
+
+    Parameters
+    ----------
+    small : ndarray of shape (h, w, 3), uint8
+        The window of the frame at the working size.
+    prior : ndarray of shape (h, w), float32 or uint8
+        Prior probability of the subject in [0, 1].
+    subject, background : ndarray of shape (h, w), bool, optional
+        Hard labels (the artist's strokes): with them the cut is never refused.
+    iters : int
+        Graph-cut iterations.
+    settings : PropagationSettings
+
+    Returns
+    -------
+    Cut
+        In the window's coordinates.
+    """
+    inside = (prior > 0.5).astype(np.uint8)
+    hard = subject is not None and subject.any()
+    if hard:
+        inside |= subject.astype(np.uint8)
+    if background is not None:
+        inside[background] = 0
+    if not inside.any():
+        return Cut(inside, 0.0)
+    x, y, w, h = cv2.boundingRect(inside)
+    side = max(w, h)
+    labels = np.full(inside.shape, cv2.GC_BGD, np.uint8)
+    labels[cv2.dilate(inside, disk(max(2, round(settings.band_frac * side)))) > 0] = \
+        cv2.GC_PR_BGD
+    labels[inside > 0] = cv2.GC_PR_FGD
+    labels[cv2.erode(inside, disk(max(1, round(settings.core_frac * side)))) > 0] = cv2.GC_FGD
+    if background is not None:
+        labels[background] = cv2.GC_BGD
+    if hard:
+        labels[subject] = cv2.GC_FGD
+    mask = keep_touching(_grabcut(small, labels, iters), subject if hard else inside)
+    area, prior_area = float(mask.sum()), float(inside.sum())
+    agree = float((mask & inside).sum()) / max(float((mask | inside).sum()), 1.0)
+    touched = hard or (background is not None and background.any())
+    if not touched and not (settings.max_shrink * prior_area <= area
+                            <= settings.max_growth * prior_area):
+        return Cut(inside, 0.0)  # a flood or a collapse: keep the warped prior
+    return Cut(mask, agree)

@@ -1,0 +1,339 @@
+"""Carrying a silhouette from frame to frame by optical flow (beyond the paper's Section 2.2).
+
+Everything works at a reduced *working size* (:class:`WorkingSize`): the subject's longer side
+is brought to about ``subject_side_px`` pixels, enough to keep thin legs while staying fast.
+
+- A frame receives the previous frame's mask warped by dense optical flow (OpenCV's DIS,
+  Kroeger et al. 2016), not shifted: each pixel looks up where it was in the previous frame.
+- It is then decided (:func:`fuse_cut`) from the colour models learnt on the key frame the mask
+  came from (kept, so they cannot drift) and the warped mask as a soft prior, smoothed along
+  the image's edges: the mask follows legs and snaps to edges.
+- A result whose area jumps away from the warped mask's (a flood into the ground, or a
+  collapse) is refused: the warped mask is kept and the frame marked as not confident. When
+  the warped pixels stop looking like the subject it is lost, and searched for again in the
+  whole frame (:func:`find_again`).
+
+Key frames (the first one, corrected ones) are cut by :mod:`gaitcore.silhouettes.keyframe`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from gaitcore.errors import GaitInputError
+from gaitcore.silhouettes.colour_model import ColourTable
+
+_PRESETS = {"ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST,
+            "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
+            "medium": cv2.DISOPTICAL_FLOW_PRESET_MEDIUM}
+Box = tuple[int, int, int, int]  # x, y, w, h
+
+
+@dataclass(frozen=True)
+class PropagationSettings:
+    """Options of the flow-and-graph-cut segmentation.
+
+    Attributes
+    ----------
+    subject_side_px : int
+        Working size: the subject's box is brought to at most this many pixels on its longer
+        side (frames are never enlarged).
+    flow_preset : {"ultrafast", "fast", "medium"}
+        DIS optical flow preset of the frame-to-frame warp.
+    band_frac : float
+        Half-width of the band where the cut decides, as a fraction of the subject's side.
+    core_frac : float
+        The warped mask eroded by this fraction of the subject's side is sure subject.
+    margin_frac : float
+        The flow and the cut are computed in the warped mask's box grown by this fraction.
+    first_iters : int
+        Graph-cut iterations on a key frame.
+    max_growth, max_shrink : float
+        A cut whose area is more than ``max_growth`` or less than ``max_shrink`` times the
+        warped mask's is refused (the warped mask is kept, the frame is not confident).
+    lost_frac : float
+        A mask smaller than this fraction of the key frame's counts as lost.
+    motion_offsets : tuple of int
+        Frames after the first whose motion seeds the first cut (empty: colour only).
+    first_scale : float
+        Frame 0 is cut at this many times the working size (then shrunk to it).
+    stroke_reach : float
+        Around a stroke, a band this many times its width takes the stroke's side in the
+        prior of the corrected frame's cut (the strokes themselves are sure labels).
+    prior_weight, prior_blur_frac, smooth_frac : float
+        How a propagated frame is decided (see :func:`fuse_cut`): weight of the warped mask
+        against colour, its blur and the guided filter's radius (fractions of the subject's
+        side).
+    """
+
+    subject_side_px: int = 200
+    flow_preset: str = "fast"
+    band_frac: float = 0.08
+    core_frac: float = 0.04
+    margin_frac: float = 0.3
+    first_iters: int = 5
+    max_growth: float = 1.6
+    max_shrink: float = 0.5
+    lost_frac: float = 0.1
+    motion_offsets: tuple[int, ...] = (1, 3, 6)
+    prior_weight: float = 1.0
+    prior_blur_frac: float = 0.03
+    smooth_frac: float = 0.02
+    first_scale: float = 1.5
+    stroke_reach: float = 2.0
+
+    def __post_init__(self) -> None:
+        if self.flow_preset not in _PRESETS:
+            raise GaitInputError(f"unknown flow preset {self.flow_preset!r}: use one of "
+                                 f"{tuple(_PRESETS)}")
+        if self.subject_side_px < 32 or self.first_iters < 1:
+            raise GaitInputError(
+                f"propagation settings out of range (subject_side_px={self.subject_side_px}, "
+                f"first_iters={self.first_iters}): use subject_side_px >= 32 and at least "
+                "one graph-cut iteration"
+            )
+        if not 0 < self.max_shrink < 1 < self.max_growth:
+            raise GaitInputError("need 0 < max_shrink < 1 < max_growth")
+
+
+@dataclass(frozen=True)
+class WorkingSize:
+    """How frames are shrunk for the cut.
+
+    Attributes
+    ----------
+    scale : float
+        Working pixels per source pixel (at most 1).
+    wh : (int, int)
+        Working frame size (width, height).
+    shape : (int, int)
+        Source frame shape (rows, cols).
+    """
+
+    scale: float
+    wh: tuple[int, int]
+    shape: tuple[int, int]
+    subject_side: float = 0.0
+
+    @classmethod
+    def for_subject(cls, shape: tuple[int, int], subject_side: float,
+                    settings: PropagationSettings) -> WorkingSize:
+        """The working size that brings a subject ``subject_side`` source pixels long to
+        ``settings.subject_side_px``."""
+        rows, cols = int(shape[0]), int(shape[1])
+        scale = min(1.0, settings.subject_side_px / max(float(subject_side), 1.0))
+        return cls(scale, (max(16, round(cols * scale)), max(16, round(rows * scale))),
+                   (rows, cols), float(subject_side))
+
+    def shrink(self, frame: np.ndarray) -> np.ndarray:
+        """Area-averaged downscale (halving with pyrDown first: cheaper on big frames)."""
+        img = frame
+        while img.shape[1] >= 2 * self.wh[0] and img.shape[0] >= 2 * self.wh[1]:
+            img = cv2.pyrDown(img)
+        if img.shape[1] == self.wh[0] and img.shape[0] == self.wh[1]:
+            return np.ascontiguousarray(img)
+        return cv2.resize(img, self.wh, interpolation=cv2.INTER_AREA)
+
+    def shrink_mask(self, mask: np.ndarray) -> np.ndarray:
+        """A full-frame bool mask at the working size (area-averaged, kept above one half)."""
+        small = cv2.resize(mask.astype(np.uint8) * np.uint8(255), self.wh,
+                           interpolation=cv2.INTER_AREA)
+        return small >= 128
+
+    def box(self, box: Box) -> Box:
+        """A source box at the working size, clipped to the frame."""
+        x, y, w, h = (float(v) * self.scale for v in box)
+        x0, y0 = max(0, int(np.floor(x))), max(0, int(np.floor(y)))
+        x1, y1 = min(self.wh[0], int(np.ceil(x + w))), min(self.wh[1], int(np.ceil(y + h)))
+        return x0, y0, max(0, x1 - x0), max(0, y1 - y0)
+
+    def enlarge(self, small: np.ndarray) -> np.ndarray:
+        """A working-size 0/1 mask as a full-frame bool mask (bilinear, above one half),
+        computed only around the mask."""
+        rows, cols = self.shape
+        out = np.zeros((rows, cols), bool)
+        x, y, w, h = cv2.boundingRect(small.astype(np.uint8))
+        if w == 0:
+            return out
+        fx, fy = cols / self.wh[0], rows / self.wh[1]
+        X0, Y0 = max(0, int((x - 1) * fx)), max(0, int((y - 1) * fy))
+        X1 = min(cols, int(np.ceil((x + w + 1) * fx)))
+        Y1 = min(rows, int(np.ceil((y + h + 1) * fy)))
+        # The sampling of cv2.resize on the whole mask: src = (dst + 1/2) / f - 1/2.
+        warp = np.array([[1 / fx, 0, (X0 + 0.5) / fx - 0.5], [0, 1 / fy, (Y0 + 0.5) / fy - 0.5]])
+        up = cv2.warpAffine(small.astype(np.uint8) * np.uint8(255), warp, (X1 - X0, Y1 - Y0),
+                            flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                            borderMode=cv2.BORDER_REPLICATE)
+        out[Y0:Y1, X0:X1] = up > 127
+        return out
+
+
+@dataclass(frozen=True)
+class Cut:
+    """One frame's result at the working size.
+
+    Attributes
+    ----------
+    mask : ndarray of shape (rows, cols), uint8
+        0/1 silhouette at the working size.
+    confidence : float
+        Agreement of the cut with its prior (intersection over union), 1 on key frames; 0 when
+        the cut was refused and the warped prior kept.
+    """
+
+    mask: np.ndarray
+    confidence: float
+
+
+def make_flow(settings: PropagationSettings) -> cv2.DISOpticalFlow:
+    """A DIS optical flow object with the settings' preset."""
+    return cv2.DISOpticalFlow_create(_PRESETS[settings.flow_preset])
+
+
+def disk(r: int) -> np.ndarray:
+    """Elliptic structuring element of radius ``r`` (at least 1)."""
+    r = max(1, int(r))
+    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+
+
+def keep_touching(mask: np.ndarray, reference: np.ndarray, *, least: float = 0.02) -> np.ndarray:
+    """The components of ``mask`` (0/1) that overlap ``reference`` by at least ``least`` of
+    the best overlap; the largest component when none does."""
+    n, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
+    if n <= 2:
+        return mask.astype(np.uint8)
+    overlap = np.bincount(labels[reference > 0], minlength=n)
+    overlap[0] = 0
+    if overlap.max() == 0:
+        overlap = np.bincount(labels.ravel(), minlength=n)
+        overlap[0] = 0
+        return (labels == int(np.argmax(overlap))).astype(np.uint8)
+    keep = overlap >= least * overlap.max()
+    keep[0] = False
+    return keep[labels].astype(np.uint8)
+
+
+def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
+              flow_of: cv2.DISOpticalFlow, settings: PropagationSettings
+              ) -> tuple[np.ndarray, tuple[int, int, int, int]]:
+    """Carry the previous mask to this frame by dense optical flow.
+
+    Parameters
+    ----------
+    mask : ndarray of shape (rows, cols), uint8
+        0/1 mask of the previous frame (working size, not empty).
+    grey_prev, grey : ndarray of shape (rows, cols), uint8
+        The previous and this frame, grey, at the working size.
+    flow_of : cv2.DISOpticalFlow
+    settings : PropagationSettings
+
+    Returns
+    -------
+    prob : ndarray of shape (h, w), float32
+        The warped mask in [0, 1] inside the window.
+    window : (x0, y0, x1, y1)
+        Where ``prob`` lies in the frame: the mask's box grown by ``margin_frac``.
+
+    Notes
+    -----
+    Backward warping: the flow from this frame to the previous one tells each pixel where it
+    came from, so the warped mask has no holes, and thin parts (legs) keep their width.
+    """
+    rows, cols = mask.shape
+    x, y, w, h = cv2.boundingRect(mask)
+    grow = int(settings.margin_frac * max(w, h)) + 8
+    x0, y0 = max(0, x - grow), max(0, y - grow)
+    x1, y1 = min(cols, x + w + grow), min(rows, y + h + grow)
+    a = np.ascontiguousarray(grey[y0:y1, x0:x1])
+    b = np.ascontiguousarray(grey_prev[y0:y1, x0:x1])
+    if min(a.shape) < 16:
+        return mask[y0:y1, x0:x1].astype(np.float32), (x0, y0, x1, y1)
+    flow = flow_of.calc(a, b, None)
+    gy, gx = np.mgrid[0 : y1 - y0, 0 : x1 - x0].astype(np.float32)
+    prob = cv2.remap(mask[y0:y1, x0:x1].astype(np.float32), gx + flow[..., 0],
+                     gy + flow[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                     borderValue=0)
+    return cv2.GaussianBlur(prob, (0, 0), 1.0), (x0, y0, x1, y1)
+
+
+def fuse_cut(small: np.ndarray, prior: np.ndarray, colours: ColourTable,
+             settings: PropagationSettings) -> Cut:
+    """Decide one window of a propagated frame from its colours and the warped mask.
+
+    Parameters
+    ----------
+    small : ndarray of shape (h, w, 3), uint8
+        The window of the frame at the working size.
+    prior : ndarray of shape (h, w), float32
+        The warped mask in [0, 1].
+    colours : ColourTable
+        Learnt on the key frame the mask was carried from, and kept: what that frame (and the
+        artist's strokes there) taught is not forgotten frame after frame, and cannot drift.
+    settings : PropagationSettings
+
+    Returns
+    -------
+    Cut
+        The kept warped mask (confidence 0) when the result's area jumped (flood, collapse);
+        an empty mask when the warped mask's pixels mostly do not look like the subject
+        (it has left, or is hidden).
+
+    Notes
+    -----
+    Per pixel, the evidence for "subject" is the colour log-likelihood ratio plus
+    ``prior_weight`` times the log-odds of the warped mask blurred by ``prior_blur_frac`` of
+    the subject's side (how far the flow may be wrong); a guided filter (He et al. 2013)
+    guided by the frame smooths it along the image's edges, and the sign decides. This
+    replaces the graph cut on propagated frames: every cue enters as a soft term (GrabCut
+    only takes hard labels), and it is several times faster.
+    """
+    inside = (prior > 0.5).astype(np.uint8)
+    if not inside.any():
+        return Cut(inside, 0.0)
+    _, _, w, h = cv2.boundingRect(inside)
+    side = max(w, h)
+    p = cv2.GaussianBlur(prior, (0, 0), max(1.0, settings.prior_blur_frac * side))
+    p = np.clip(p, 0.02, 0.98)
+    evidence = colours(small) + settings.prior_weight * np.log(p / (1 - p))
+    evidence = cv2.ximgproc.guidedFilter(np.ascontiguousarray(small), evidence,
+                                         max(1, round(settings.smooth_frac * side)), 4.0)
+    mask = keep_touching((evidence > 0).astype(np.uint8), inside)
+    area, prior_area = float(mask.sum()), float(inside.sum())
+    if area < settings.max_shrink * prior_area and np.median(evidence[inside > 0]) < 0:
+        return Cut(np.zeros_like(inside), 0.0)  # nothing there looks like the subject: gone
+    if not settings.max_shrink * prior_area <= area <= settings.max_growth * prior_area:
+        return Cut(inside, 0.0)
+    agree = float((mask & inside).sum()) / max(float((mask | inside).sum()), 1.0)
+    return Cut(mask, agree)
+
+
+def find_again(small: np.ndarray, colours: ColourTable, area: float,
+               settings: PropagationSettings) -> np.ndarray:
+    """Look for a lost subject in a whole frame by colour alone.
+
+    Parameters
+    ----------
+    small : ndarray of shape (rows, cols, 3), uint8
+        The frame at the working size.
+    colours : ColourTable
+    area : float
+        The subject's area on its key frame (working pixels).
+    settings : PropagationSettings
+
+    Returns
+    -------
+    ndarray of shape (rows, cols), uint8
+        The largest subject-coloured component whose area is within ``max_shrink`` ..
+        ``max_growth`` times ``area``; all zeros when there is none (still lost).
+    """
+    evidence = cv2.ximgproc.guidedFilter(np.ascontiguousarray(small), colours(small), 2, 4.0)
+    found = cv2.morphologyEx((evidence > 0).astype(np.uint8), cv2.MORPH_OPEN, disk(1))
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(found, connectivity=8)
+    sizes = stats[1:, cv2.CC_STAT_AREA].astype(float)
+    ok = np.nonzero((sizes >= settings.max_shrink * area) & (sizes <= settings.max_growth * area))[0]
+    if not ok.size:
+        return np.zeros(found.shape, np.uint8)
+    return (labels == 1 + ok[np.argmax(sizes[ok])]).astype(np.uint8)

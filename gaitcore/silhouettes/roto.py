@@ -1,0 +1,443 @@
+"""A clip's silhouettes from one box, corrected by strokes on any frame (the Roto Brush model).
+
+The first frame is cut from the artist's box (or the paper's rectangles); every frame that
+carries strokes is a *key frame*, cut again with its strokes as hard labels. Masks travel from
+each key frame forward, and backward, by optical flow and a graph cut
+(:mod:`gaitcore.silhouettes.propagate`), up to the next key frame; where both directions reach
+a frame, their masks are blended, weighted by how near each key is. A correction changes only
+the frames between its neighbouring key frames.
+
+Only working-size masks are kept (bit-packed around the subject), so a 10,000-frame clip costs
+tens of megabytes; frames are decoded again when a backward pass needs them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from gaitcore.errors import GaitInputError
+from gaitcore.progress import Progress, report
+from gaitcore.silhouettes.annotations import Rect, Scribble
+from gaitcore.silhouettes.colour_model import ColourModel, check_frame, learn_colours, rect_mask
+from gaitcore.silhouettes.keyframe import cut_first, cut_with_prior, motion_residual
+from gaitcore.silhouettes.propagate import (
+    Cut,
+    PropagationSettings,
+    WorkingSize,
+    find_again,
+    fuse_cut,
+    keep_touching,
+    make_flow,
+    warp_mask,
+)
+from gaitcore.silhouettes.sketch import rasterize_strokes
+
+_CHUNK = 64  # frames decoded at once for a backward pass
+
+
+@dataclass(frozen=True)
+class FrameState:
+    """What the segmentation says of one frame.
+
+    Attributes
+    ----------
+    lost : bool
+        No subject, or a mask far smaller than on the key frames.
+    corrected : bool
+        The frame carries the artist's strokes.
+    confidence : float
+        In [0, 1]: how well the graph cut agreed with the mask carried by optical flow (1 on
+        key frames, 0 where a cut was refused as a flood or a collapse).
+    """
+
+    lost: bool
+    corrected: bool
+    confidence: float
+
+
+class _PackedMasks:
+    """Working-size 0/1 masks by frame, stored as packed bits of their bounding box."""
+
+    def __init__(self, shape: tuple[int, int]) -> None:
+        self.shape = shape
+        self._items: dict[int, tuple[np.ndarray, int, int, int, int, float]] = {}
+
+    def put(self, t: int, cut: Cut) -> None:
+        x, y, w, h = cv2.boundingRect(cut.mask)
+        bits = np.packbits(cut.mask[y : y + h, x : x + w] > 0, axis=None)
+        self._items[t] = (bits, x, y, w, h, cut.confidence)
+
+    def get(self, t: int) -> Cut | None:
+        item = self._items.get(t)
+        if item is None:
+            return None
+        bits, x, y, w, h, conf = item
+        mask = np.zeros(self.shape, np.uint8)
+        mask[y : y + h, x : x + w] = np.unpackbits(bits, count=w * h).reshape(h, w)
+        return Cut(mask, conf)
+
+
+class RotoSegmentation:
+    """Silhouettes of a whole clip, propagated from key frames both ways.
+
+    Parameters
+    ----------
+    source : FrameSource or sequence of ndarray (rows, cols, 3) uint8
+        The clip. A :class:`gaitcore.footage.sources.FrameSource` is streamed.
+    box : Rect, optional
+        Around the subject on frame 0 (the GrabCut convention).
+    subject_rects, background_rects : sequence of Rect
+        The paper's rectangles on frame 0 (sure subject, sure background); with no box they
+        seed a colour model (paper Section 2.2) whose guess starts the first cut.
+    scribbles : sequence of Scribble
+        Strokes on any frames (see :meth:`correct`).
+    settings : PropagationSettings, optional
+
+    Raises
+    ------
+    GaitInputError
+        No box and no rectangles, a box or rectangle outside the frame, a scribble outside
+        the clip, an empty clip.
+    """
+
+    def __init__(self, source, *, box: Rect | None = None, subject_rects: Sequence[Rect] = (),
+                 background_rects: Sequence[Rect] = (), scribbles: Sequence[Scribble] = (),
+                 settings: PropagationSettings | None = None) -> None:
+        self.source = source
+        self.n = len(source)
+        if self.n == 0:
+            raise GaitInputError("the clip has no frames: choose another file or frame range")
+        self.s = settings or PropagationSettings()
+        first = check_frame(source[0])
+        rows, cols = first.shape[:2]
+        if box is None and not any(sc.frame == 0 and sc.label == "subject" for sc in scribbles):
+            if not subject_rects:
+                raise GaitInputError("no box and no subject rectangle given: draw a box around "
+                                     "the subject on the first frame (--box x,y,w,h)")
+            if not background_rects:
+                raise GaitInputError("no background rectangle given: draw at least one on the "
+                                     "first frame, or a box around the subject instead")
+        self.box = None if box is None else box.clipped_to(cols, rows)
+        self.subject_rects = [r.clipped_to(cols, rows) for r in subject_rects]
+        self.background_rects = [r.clipped_to(cols, rows) for r in background_rects]
+        check_scribbles(scribbles, self.n, (rows, cols))
+        self.scribbles: tuple[Scribble, ...] = tuple(scribbles)
+        side = self._subject_side()
+        self.work = WorkingSize.for_subject((rows, cols), side, self.s)
+        self.fwd = _PackedMasks(self.work.wh[::-1])
+        self.bwd = _PackedMasks(self.work.wh[::-1])
+        self.keys: dict[int, Cut] = {}
+        self.key_area = 1.0
+
+    # -- public -----------------------------------------------------------------------------
+    @property
+    def corrected_frames(self) -> tuple[int, ...]:
+        return tuple(sorted({sc.frame for sc in self.scribbles}))
+
+    def run(self, progress: Progress | None = None) -> None:
+        """Segment the whole clip from frame 0 and the strokes given so far.
+
+        Raises
+        ------
+        Cancelled
+            When ``progress`` returned False.
+        """
+        self.keys.clear()
+        self.fwd, self.bwd = _PackedMasks(self.fwd.shape), _PackedMasks(self.bwd.shape)
+        key_frames = sorted({0} | set(self.corrected_frames))
+        done = [0]
+        total = self.n + sum(b - a for a, b in zip(key_frames, key_frames[1:]))
+        self.keys[0] = self._first_cut()
+        self.key_area = max(1.0, float(self.keys[0].mask.sum()))
+        done[0] = 1
+        report(progress, 1, total, "segmentation cancelled")
+        for a, b in zip(key_frames, key_frames[1:] + [self.n]):
+            self._forward(a, min(b + 1, self.n), progress, done, total)
+            if b < self.n:
+                self.keys[b] = self._key_cut(b, self._blend(b, a, b, key_frames_only=True))
+                self._backward(b, a, progress, done, total)
+
+    def correct(self, scribbles: Sequence[Scribble], progress: Progress | None = None
+                ) -> tuple[int, int]:
+        """Add strokes (on one or more frames) and re-propagate only where they matter.
+
+        Each stroked frame is cut again with all its strokes as hard labels, starting from its
+        current mask; the change travels forward and backward up to the neighbouring key
+        frames.
+
+        Returns
+        -------
+        (first, stop) : the range of frames that changed.
+        """
+        check_scribbles(scribbles, self.n, self.work.shape)
+        self.scribbles = self.scribbles + tuple(scribbles)
+        lo, hi = self.n, 0
+        for k in sorted({sc.frame for sc in scribbles}):
+            keys = sorted(self.keys)
+            prev = max([f for f in keys if f < k], default=None)
+            nxt = min([f for f in keys if f > k], default=self.n)
+            current = self.keys[k].mask if k in self.keys else self._final(k)
+            self.keys[k] = self._key_cut(k, current.astype(np.float32))
+            done, total = [0], nxt - (k if prev is None else prev)
+            self._forward(k, nxt, progress, done, total)
+            if prev is not None:
+                self._backward(k, prev, progress, done, total)
+            lo, hi = min(lo, k if prev is None else prev + 1), max(hi, nxt)
+        return lo, hi
+
+    def mask(self, t: int) -> np.ndarray:
+        """Frame ``t``'s silhouette at the source size, (rows, cols) bool."""
+        return self.work.enlarge(self._final(t))
+
+    def state(self, t: int) -> FrameState:
+        """Lost, corrected and confidence of frame ``t``."""
+        corrected = t in set(self.corrected_frames)
+        if t in self.keys:
+            area, conf = float(self.keys[t].mask.sum()), 1.0
+        else:
+            _, b = self._neighbours(t)
+            cuts = [c for c in (self.fwd.get(t), self.bwd.get(t) if b < self.n else None) if c]
+            conf = float(np.mean([c.confidence for c in cuts])) if cuts else 0.0
+            area = float(self._final(t).sum())
+        return FrameState(area < self.s.lost_frac * self.key_area, corrected, round(conf, 3))
+
+    # -- key frames -------------------------------------------------------------------------
+    def _subject_side(self) -> float:
+        """The subject's longer side in source pixels, as far as frame 0's input tells."""
+        boxes = ([self.box] if self.box else []) + list(self.subject_rects)
+        if self.box is not None:
+            return float(max(self.box.w, self.box.h))
+        pts = [sc.points_xy for sc in self.scribbles if sc.frame == 0 and sc.label == "subject"]
+        if boxes:
+            x0 = min(r.x for r in boxes)
+            x1 = max(r.x + r.w for r in boxes)
+            y0 = min(r.y for r in boxes)
+            y1 = max(r.y + r.h for r in boxes)
+            pts.append(np.array([[x0, y0], [x1, y1]], float))
+        allp = np.concatenate(pts)
+        # Rectangles and strokes cover part of the animal: assume it is about twice as big.
+        return 2.0 * float(max(np.ptp(allp[:, 0]), np.ptp(allp[:, 1]), 8.0))
+
+    def _stroke_masks(self, t: int) -> tuple[np.ndarray | None, np.ndarray | None]:
+        out = []
+        for label in ("subject", "background"):
+            mine = [sc for sc in self.scribbles if sc.frame == t and sc.label == label]
+            out.append(self.work.shrink_mask(rasterize_strokes(mine, self.work.shape) > 0)
+                       if mine else None)
+        return out[0], out[1]
+
+    def _first_cut(self) -> Cut:
+        """Frame 0 from the box, rectangles or strokes, cut at ``first_scale`` times the
+        working size (finer: nothing is known yet but the box)."""
+        frame = check_frame(self.source[0])
+        work = self.work
+        self.work = WorkingSize.for_subject(work.shape, work.subject_side / self.s.first_scale,
+                                            self.s)
+        try:
+            mask = self._first_cut_here(frame)
+        finally:
+            fine, self.work = self.work, work
+        return Cut(work.shrink_mask(fine.enlarge(mask)).astype(np.uint8), 1.0)
+
+    def _first_cut_here(self, frame: np.ndarray) -> np.ndarray:
+        small = self.work.shrink(frame)
+        subject, background = self._stroke_masks(0)
+        rects_fg = rects_bg = None
+        if self.subject_rects:
+            rects_fg = self.work.shrink_mask(rect_mask(frame.shape, self.subject_rects, "subject"))
+        if self.background_rects:
+            rects_bg = self.work.shrink_mask(rect_mask(frame.shape, self.background_rects,
+                                                       "background"))
+        box = None if self.box is None else self.work.box(self.box.as_tuple())
+        residual = seed = None
+        if box is None and self.subject_rects and self.background_rects:
+            box, seed = self._box_from_rects(small, rects_fg, rects_bg)
+        elif box is not None and self.s.motion_offsets:
+            later = [self.work.shrink(check_frame(self.source[k]))
+                     for k in self.s.motion_offsets if k < self.n]
+            residual = motion_residual(small, later, box) if later else None
+        fg = _union(subject, rects_fg)
+        bg = _union(background, rects_bg)
+        if fg is not None and bg is not None:
+            bg &= ~fg
+        return cut_first(small, box, residual=residual, seed=seed, subject=fg, background=bg,
+                         settings=self.s)
+
+    def _box_from_rects(self, small: np.ndarray, fg: np.ndarray, bg: np.ndarray):
+        """The paper's rectangles as a box and a seed: the subject-coloured components (paper
+        2.2's mixture model) under the subject rectangles, and their bounding box grown by a
+        tenth."""
+        model = ColourModel.fit(small, [_scaled(r, self.work.scale) for r in self.subject_rects],
+                                [_scaled(r, self.work.scale) for r in self.background_rects])
+        guess = ((model.posterior(small) > 127) & ~bg) | fg
+        guess = keep_touching(cv2.morphologyEx(guess.astype(np.uint8), cv2.MORPH_OPEN,
+                                               np.ones((3, 3), np.uint8)) | fg, fg)
+        x, y, w, h = cv2.boundingRect(guess)
+        pad_x, pad_y = round(0.1 * w) + 2, round(0.1 * h) + 2
+        x0, y0 = max(0, x - pad_x), max(0, y - pad_y)
+        return (x0, y0, min(small.shape[1], x + w + pad_x) - x0,
+                min(small.shape[0], y + h + pad_y) - y0), guess > 0
+
+    def _key_cut(self, t: int, prior: np.ndarray) -> Cut:
+        """Cut a corrected frame: its strokes are sure labels, and the prior around them takes
+        their side (a stroke painted over a wrong region turns the region, not a line)."""
+        small = self.work.shrink(check_frame(self.source[t]))
+        subject, background = self._stroke_masks(t)
+        prior = prior.astype(np.float32)
+        for label, value in (("subject", 1.0), ("background", 0.0)):
+            mine = [sc for sc in self.scribbles if sc.frame == t and sc.label == label]
+            if mine:
+                wide = [Scribble(sc.points_xy, sc.width_px * self.s.stroke_reach, t, label)
+                        for sc in mine]
+                prior[self.work.shrink_mask(rasterize_strokes(wide, self.work.shape) > 0)] = value
+        cut = cut_with_prior(small, prior, subject=subject, background=background,
+                             iters=self.s.first_iters, settings=self.s)
+        return Cut(cut.mask, 1.0)
+
+    # -- propagation ------------------------------------------------------------------------
+    def _frames(self, start: int, stop: int) -> Iterator[tuple[int, np.ndarray]]:
+        """Working-size frames ``start <= t < stop`` in order."""
+        if hasattr(self.source, "iter_frames"):
+            stream = self.source.iter_frames(start, stop, prefetch=4)
+        else:
+            stream = ((t, self.source[t]) for t in range(start, stop))
+        try:
+            for t, img in stream:
+                img = check_frame(img)
+                if img.shape[:2] != self.work.shape:
+                    raise GaitInputError(f"frame {t} is {img.shape[:2]} but frame 0 is "
+                                         f"{self.work.shape}: all frames must have the same size")
+                yield t, self.work.shrink(img)
+        finally:
+            stream.close()
+
+    def _forward(self, key: int, stop: int, progress, done, total) -> None:
+        self._carry(self.keys[key].mask, key, self._frames(key, stop), self.fwd,
+                    progress, done, total)
+
+    def _backward(self, key: int, stop: int, progress, done, total) -> None:
+        """From key frame ``key`` down to ``stop`` (excluded), decoding in chunks."""
+        def reversed_frames() -> Iterator[tuple[int, np.ndarray]]:
+            hi = key + 1
+            while hi > stop + 1:
+                lo = max(stop + 1, hi - _CHUNK)
+                chunk = list(self._frames(lo, hi))
+                yield from reversed(chunk)
+                hi = lo
+        self._carry(self.keys[key].mask, key, reversed_frames(), self.bwd, progress, done, total)
+
+    def _carry(self, mask: np.ndarray, key: int, frames, store: _PackedMasks,
+               progress, done, total) -> None:
+        flow_of = make_flow(self.s)
+        grey_prev = models = None
+        for t, small in frames:
+            grey = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
+            if t == key:
+                models = self._models(small, mask)
+            else:
+                cut = self._step(mask, grey_prev, small, grey, flow_of, models)
+                store.put(t, cut)
+                mask = cut.mask
+                done[0] += 1
+                report(progress, done[0], max(total, done[0]), "segmentation cancelled")
+            grey_prev = grey
+
+    def _models(self, small: np.ndarray, mask: np.ndarray):
+        """Colour mixtures of a key frame, learnt in the window its successors will use."""
+        if not mask.any():
+            return None
+        x, y, w, h = cv2.boundingRect(mask)
+        grow = int(self.s.margin_frac * max(w, h)) + 8
+        x0, y0 = max(0, x - grow), max(0, y - grow)
+        return learn_colours(small[y0 : y + h + grow, x0 : x + w + grow],
+                             mask[y0 : y + h + grow, x0 : x + w + grow])
+
+    def _step(self, mask, grey_prev, small, grey, flow_of, models) -> Cut:
+        if models is None:
+            return Cut(mask, 0.0)
+        if mask.sum() < self.s.lost_frac * self.key_area:
+            return Cut(find_again(small, models, self.key_area, self.s), 0.0)
+        prob, (x0, y0, x1, y1) = warp_mask(mask, grey_prev, grey, flow_of, self.s)
+        cut = fuse_cut(small[y0:y1, x0:x1], prob, models, self.s)
+        out = np.zeros_like(mask)
+        out[y0:y1, x0:x1] = cut.mask
+        return Cut(out, cut.confidence)
+
+    # -- blending ---------------------------------------------------------------------------
+    def _neighbours(self, t: int) -> tuple[int, int]:
+        keys = sorted(self.keys)
+        a = max([k for k in keys if k <= t], default=0)
+        b = min([k for k in keys if k > t], default=self.n)
+        return a, b
+
+    def _final(self, t: int) -> np.ndarray:
+        if t in self.keys:
+            return self.keys[t].mask
+        a, b = self._neighbours(t)
+        return self._blend(t, a, b).astype(np.uint8)
+
+    def _blend(self, t: int, a: int, b: int, *, key_frames_only: bool = False) -> np.ndarray:
+        """Forward mask from key ``a`` and backward mask from key ``b`` at frame ``t``, mixed
+        by nearness (a probability in [0, 1] thresholded at one half)."""
+        f = self.fwd.get(t)
+        g = None if key_frames_only or b >= self.n else self.bwd.get(t)
+        if f is None and g is None:
+            return np.zeros(self.fwd.shape, np.uint8)
+        if f is None or g is None:
+            return (f or g).mask
+        w = (b - t) / max(b - a, 1)
+        soft = (w * cv2.GaussianBlur(f.mask.astype(np.float32), (0, 0), 1.5)
+                + (1 - w) * cv2.GaussianBlur(g.mask.astype(np.float32), (0, 0), 1.5))
+        return (soft > 0.5).astype(np.uint8)
+
+
+def check_scribbles(scribbles: Sequence[Scribble], n_frames: int,
+                    shape: tuple[int, int]) -> None:
+    """Raise GaitInputError for a scribble outside the clip or entirely outside the frame."""
+    rows, cols = shape
+    for sc in scribbles:
+        if not 0 <= sc.frame < n_frames:
+            raise GaitInputError(f"a {sc.label} scribble is on frame {sc.frame} but the clip has "
+                                 f"{n_frames} frames (0..{n_frames - 1}): move or delete it")
+        p = sc.points_xy
+        if (p[:, 0].max() < 0 or p[:, 1].max() < 0 or p[:, 0].min() >= cols
+                or p[:, 1].min() >= rows):
+            raise GaitInputError(f"a {sc.label} scribble on frame {sc.frame} lies outside the "
+                                 f"{cols}x{rows} frame: draw it over the image")
+
+
+def _union(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
+    if a is None:
+        return b
+    return a if b is None else a | b
+
+
+def _scaled(r: Rect, scale: float) -> Rect:
+    return Rect(int(r.x * scale), int(r.y * scale), max(1, round(r.w * scale)),
+                max(1, round(r.h * scale)))
+
+
+def segment_roto(source, *, progress: Progress | None = None,
+                 mask_sink: Callable[[int, np.ndarray, FrameState], None] | None = None,
+                 **options) -> RotoSegmentation:
+    """Run :class:`RotoSegmentation` on a clip and hand every full-frame mask to a sink.
+
+    Parameters
+    ----------
+    source : FrameSource or sequence of frames
+    progress : callable(done, total) -> bool, optional
+    mask_sink : callable(frame, mask, state), optional
+        ``mask`` is (rows, cols) uint8 0/255.
+    **options
+        Keyword options of :class:`RotoSegmentation` (box, rectangles, scribbles, settings).
+    """
+    seg = RotoSegmentation(source, **options)
+    seg.run(progress)
+    if mask_sink is not None:
+        for t in range(seg.n):
+            mask_sink(t, seg.mask(t).astype(np.uint8) * np.uint8(255), seg.state(t))
+    return seg

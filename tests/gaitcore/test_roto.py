@@ -1,0 +1,181 @@
+"""Segmentation from one box with corrections on any frame, its files and its command."""
+
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from gaitcore.bench.scripted_user import (
+    corrective_stroke,
+    iou,
+    legs_iou,
+    padded_box,
+    run_scripted_user,
+)
+from gaitcore.cli import main
+from gaitcore.errors import GaitInputError
+from gaitcore.io.scribbles import read_scribbles, scribbles_from_dict, write_scribbles
+from gaitcore.silhouettes.annotations import Rect, Scribble
+from gaitcore.silhouettes.roto import RotoSegmentation
+from tests.gaitcore.test_segmentation import scene
+
+
+def _error_line(capsys) -> str:
+    err = capsys.readouterr().err.strip()
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    return err
+
+
+def test_one_box_is_enough():
+    frames, truth = scene(14)
+    seg = RotoSegmentation(frames, box=padded_box(truth[0]))
+    seg.run()
+    scores = [iou(seg.mask(t), truth[t]) for t in range(len(frames))]
+    assert min(scores) >= 0.85, scores
+    assert min(legs_iou(seg.mask(t), truth[t]) for t in range(len(frames))) >= 0.6
+    assert not any(seg.state(t).lost for t in range(len(frames)))
+
+
+def test_a_correction_changes_only_the_frames_up_to_the_neighbouring_keys():
+    frames, truth = scene(14)
+    seg = RotoSegmentation(frames, box=padded_box(truth[0]))
+    seg.run()
+    before = [seg.mask(t).copy() for t in range(14)]
+    # A wrong background stroke across the body of frame 7 must change frame 7 and may change
+    # its neighbours, up to the ends of the clip (the only other key is frame 0).
+    wrong = Scribble([[30.0, 50.0], [70.0, 50.0]], 6, 7, "background")
+    first, stop = seg.correct([wrong])
+    assert (first, stop) == (1, 14)
+    assert seg.state(7).corrected and not seg.state(6).corrected
+    assert (seg.mask(7) != before[7]).any()
+    assert np.array_equal(seg.mask(0), before[0])
+    # A second key at frame 10 bounds what a new stroke on frame 12 can change.
+    seg.correct([Scribble([[60.0, 50.0]], 4, 10, "subject")])
+    after_10 = [seg.mask(t).copy() for t in range(14)]
+    first, stop = seg.correct([Scribble([[80.0, 20.0]], 4, 12, "background")])
+    assert (first, stop) == (11, 14)
+    for t in range(11):
+        assert np.array_equal(seg.mask(t), after_10[t]), t
+
+
+def test_the_scripted_user_strokes_the_largest_wrong_region():
+    ref = np.zeros((60, 80), bool)
+    ref[10:50, 10:70] = True
+    mask = ref.copy()
+    mask[20:40, 30:60] = False  # a missed block
+    mask[0:5, 0:10] = True  # a small false positive
+    stroke = corrective_stroke(mask, ref, 3)
+    assert stroke.label == "subject" and stroke.frame == 3
+    pts = stroke.points_xy
+    assert (pts[:, 0] >= 30).all() and (pts[:, 0] < 60).all()
+    assert (pts[:, 1] >= 20).all() and (pts[:, 1] < 40).all()
+    assert corrective_stroke(ref, ref, 0) is None
+
+
+def test_the_scripted_user_improves_a_wrong_start():
+    frames, truth = scene(10)
+    # A box around the body only: the legs are outside it on frame 0.
+    seg = RotoSegmentation(frames, box=Rect(12, 38, 46, 24))
+    seg.run()
+    run = run_scripted_user(seg, truth, 3)
+    assert run.ious.shape[1] == 10 and run.seconds.size >= 1
+    assert run.ious[-1].mean() > run.ious[0].mean() + 0.03, run.ious.mean(axis=1)
+
+
+def test_a_subject_that_leaves_the_frame_is_flagged_lost():
+    frames, truth = scene(14, gone=tuple(range(8, 14)))
+    seg = RotoSegmentation(frames, box=padded_box(truth[0]))
+    seg.run()
+    assert [seg.state(t).lost for t in range(14)] == [t >= 8 for t in range(14)]
+
+
+@pytest.mark.parametrize(("data", "match"), [
+    ({"scribbles": [{"frame": 1, "label": "fur", "points": [[1, 2]]}]}, "label 'fur'"),
+    ({"scribbles": [{"frame": 99, "label": "subject", "points": [[1, 2]]}]}, "frame 99"),
+    ({"scribbles": [{"label": "subject", "points": [[1, 2]]}]}, "malformed"),
+    ({"scribbles": [{"frame": 1, "label": "subject", "points": [1, 2]}]}, "shape"),
+    ({"strokes": []}, "expected an object"),
+])
+def test_bad_scribbles(data, match):
+    with pytest.raises(GaitInputError, match=match):
+        scribbles_from_dict(data, n_frames=10)
+
+
+def test_scribbles_round_trip(tmp_path):
+    sc = [Scribble([[1.5, 2.0], [3.0, 4.0]], 8, 12, "subject"),
+          Scribble([[5.0, 6.0]], 3, 0, "background")]
+    write_scribbles(tmp_path / "s.json", sc)
+    assert read_scribbles(tmp_path / "s.json") == sc
+    (tmp_path / "bad.json").write_text("{not json")
+    with pytest.raises(GaitInputError, match="not a readable scribbles file"):
+        read_scribbles(tmp_path / "bad.json")
+
+
+def _write_clip(folder, frames):
+    folder.mkdir()
+    for t, f in enumerate(frames):
+        cv2.imwrite(str(folder / f"{t:05d}.png"), f)
+    return folder
+
+
+def test_segment_command_writes_masks_and_states(tmp_path, capsys):
+    frames, truth = scene(8)
+    clip = _write_clip(tmp_path / "clip", frames)
+    (tmp_path / "s.json").write_text(json.dumps({"scribbles": [
+        {"frame": 5, "label": "subject", "width": 4, "points": [[40, 50], [55, 50]]}]}))
+    b = padded_box(truth[0])
+    out = tmp_path / "out"
+    assert main(["segment", str(clip), "--out", str(out), "--box",
+                 f"{b.x},{b.y},{b.w},{b.h}", "--scribbles", str(tmp_path / "s.json")]) == 0
+    masks = sorted((out / "masks").glob("*.png"))
+    assert [p.name for p in masks] == [f"{t:05d}.png" for t in range(8)]
+    first = cv2.imread(str(masks[0]), cv2.IMREAD_UNCHANGED)
+    assert first.shape == truth[0].shape and set(np.unique(first)) <= {0, 255}
+    assert iou(first > 0, truth[0]) > 0.85
+    data = json.loads((out / "segmentation.json").read_text())
+    assert data["n_frames"] == 8
+    assert [f["corrected"] for f in data["frames"]] == [t == 5 for t in range(8)]
+    assert all(0 <= f["confidence"] <= 1 and f["lost"] is False for f in data["frames"])
+
+
+@pytest.mark.parametrize(("args", "scribbles", "match"), [
+    (["--box", "500,500,10,10"], "", "outside"),
+    (["--box", "10,10,0,5"], "", "empty"),
+    (["--scribbles", "SCRIBBLES"], '{"scribbles": [{"frame": 40, "label": "subject", '
+     '"points": [[40, 50]]}]}', "frame 40"),
+    (["--scribbles", "SCRIBBLES"], '{"scribbles": [{"frame": 1, "label": "leg", '
+     '"points": [[40, 50]]}]}', "label 'leg'"),
+    (["--scribbles", "SCRIBBLES"], '{"scribbles": [', "not a readable scribbles file"),
+    ([], "", "give a --box"),
+])
+def test_segment_command_bad_input(tmp_path, capsys, args, scribbles, match):
+    frames, _ = scene(3)
+    clip = _write_clip(tmp_path / "clip", frames)
+    (tmp_path / "s.json").write_text(scribbles)
+    args = [str(tmp_path / "s.json") if a == "SCRIBBLES" else a for a in args]
+    if "--box" not in args:
+        args += ["--box", "10,30,60,40"] if args else []
+    assert main(["segment", str(clip), "--out", str(tmp_path / "out"), *args]) == 2
+    assert match in _error_line(capsys)
+
+
+def test_a_small_animal_in_a_large_frame_keeps_its_detail():
+    """The working size follows the subject's box, not the frame: the scene pasted into 8 x 8
+    times larger grass is segmented as well as the original."""
+    frames, truth = scene(8)
+    rng = np.random.default_rng(5)
+    rows, cols, y0, x0 = 8 * truth.shape[1], 8 * truth.shape[2], 400, 500
+    texture = cv2.GaussianBlur(rng.normal(0, 25, (rows, cols)).astype(np.float32), (0, 0), 2)
+    grass = np.clip(np.array([50, 140, 70], np.float32) + texture[..., None] * [1, 1.5, 1],
+                    0, 255).astype(np.uint8)
+    big = np.repeat(grass[None], len(frames), axis=0)
+    big[:, y0 : y0 + truth.shape[1], x0 : x0 + truth.shape[2]] = frames
+    big_truth = np.zeros(big.shape[:3], bool)
+    big_truth[:, y0 : y0 + truth.shape[1], x0 : x0 + truth.shape[2]] = truth
+    seg = RotoSegmentation(big, box=padded_box(big_truth[0]))
+    seg.run()
+    assert seg.work.scale == 1.0
+    assert min(iou(seg.mask(t), big_truth[t]) for t in range(len(big))) >= 0.85
