@@ -49,7 +49,7 @@ def ensure_demo_clip(folder: Path, progress: Progress | None = None) -> Path:
         return folder
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
     from gaitcore.bench import generate_gait, iter_render
-    from gaitcore.rig.skeleton import load_template
+    from gaitcore.rig.templates import load_template
 
     partial = folder.with_name(folder.name + ".partial")
     shutil.rmtree(partial, ignore_errors=True)

@@ -90,6 +90,20 @@ class MainWindow(QMainWindow):
         self.animator = AnimationController(self.state, self)
         self.exporter = ExportController(self.state, self.animator, self.documents, self)
 
+        self._build_views()
+        self._build_docks()
+        self.tools = ToolsController(self.state, self.frame_view, self.documents, self)
+        self.addToolBar(self.tools.toolbar)
+        self._build_menus()
+
+        self._connect_messages()
+        self._set_default_sizes()
+        if remember_layout:
+            self._restore_layout()
+        self._update_title()
+
+    def _build_views(self) -> None:
+        """The footage and the rig side by side in the centre, and the docked widgets."""
         self.frame_view = FrameView(self.state, self.loader)
         self.timeline = TimelineWidget(self.state)
         self.pc_plot = PCPlotWidget(self.state)
@@ -105,6 +119,9 @@ class MainWindow(QMainWindow):
         self.setCentralWidget(self.views)
         self.pose_panel = PosePanel(self.state, self.posing)
         self.animation_view = AnimationView(self.state, self.animator, self.posing)
+
+    def _build_docks(self) -> None:
+        """Dock the widgets: timeline and weights below, loop and verdict right, posing left."""
         self.docks = {
             "timeline": self._dock("Timeline", self.timeline, Qt.DockWidgetArea.BottomDockWidgetArea),
             "animation": self._dock("Animation weights", self.animation_view, Qt.DockWidgetArea.BottomDockWidgetArea),
@@ -120,10 +137,9 @@ class MainWindow(QMainWindow):
         self.splitDockWidget(self.docks["pcs"], self.docks["diagnosis"], Qt.Orientation.Vertical)
         self.tabifyDockWidget(self.docks["posing"], self.docks["eigen"])
         self.docks["posing"].raise_()
-        self.tools = ToolsController(self.state, self.frame_view, self.documents, self)
-        self.addToolBar(self.tools.toolbar)
-        self._build_menus()
 
+    def _connect_messages(self) -> None:
+        """Status-bar messages and the window title follow the controllers and the state."""
         for source in (self.frame_view, self.pc_plot, self.documents, self.posing):
             source.messageRaised.connect(self._show_message)
         self.state.analysisFailed.connect(self._show_message)
@@ -131,14 +147,14 @@ class MainWindow(QMainWindow):
         self.state.pathChanged.connect(self._update_title)
         self.state.sourceChanged.connect(self._update_title)
         self.documents.recentChanged.connect(self._fill_recent)
+
+    def _set_default_sizes(self) -> None:
+        """The layout of a first start (a remembered one replaces it)."""
         self.resize(1500, 950)
         self.resizeDocks([self.docks["posing"], self.docks["pcs"]], [280, 330], Qt.Orientation.Horizontal)
         self.views.setSizes([380, 620])  # the rig over the footage gets the larger pane
         self.resizeDocks([self.docks["timeline"], self.docks["animation"]], [70, 170], Qt.Orientation.Vertical)
         self.resizeDocks([self.docks["pcs"], self.docks["diagnosis"]], [360, 300], Qt.Orientation.Vertical)
-        if remember_layout:
-            self._restore_layout()
-        self._update_title()
 
     def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea, *,
               scroll: bool = False) -> QDockWidget:

@@ -17,7 +17,8 @@ from gaitcore.analysis.analyze import Analysis
 from gaitcore.footage.sources import FrameSource
 from gaitcore.project.document import Project
 from gaitcore.rig.proportions import proportioned
-from gaitcore.rig.skeleton import Skeleton, load_template
+from gaitcore.rig.skeleton import Skeleton
+from gaitcore.rig.templates import load_template
 
 DEFAULT_SKELETON = "horse"
 

@@ -22,7 +22,8 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 from benchmarks import Section
 from gaitcore.bench.gaits import generate_gait
 from gaitcore.rig.render import SkeletonRenderer, render_clip
-from gaitcore.rig.skeleton import Skeleton, load_template
+from gaitcore.rig.skeleton import Skeleton
+from gaitcore.rig.templates import load_template
 
 WIDTH, HEIGHT = 320, 240
 N_FRAMES = 240

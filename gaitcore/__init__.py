@@ -6,7 +6,8 @@ command are both thin layers over this package.
 
 from gaitcore.analysis.image_pca import ImagePCA
 from gaitcore.analysis.keyimages import KeySelection, condition_curve, select_key_images
-from gaitcore.analysis.spectrum import Diagnosis, Verdict, diagnose
+from gaitcore.analysis.spectrum import Diagnosis, diagnose
+from gaitcore.analysis.verdict import Verdict
 from gaitcore.animation.rbf import RBFPoseMap
 from gaitcore.errors import GaitInputError
 

@@ -19,7 +19,7 @@ from gaitcore.bench.evaluate import BenchSettings, evaluate_gait  # noqa: E402
 from gaitcore.bench.exports import measure_exports  # noqa: E402
 from gaitcore.bench.gaits import generate_gait  # noqa: E402
 from gaitcore.bench.plots import plot_error_curves, plot_trajectory  # noqa: E402
-from gaitcore.rig.skeleton import load_template  # noqa: E402
+from gaitcore.rig.templates import load_template  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"

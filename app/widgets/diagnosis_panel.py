@@ -16,7 +16,7 @@ from PySide6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
 from app.state import AppState
 from gaitcore.analysis.analyze import Analysis
-from gaitcore.analysis.spectrum import QUIET_CORRELATION, Verdict
+from gaitcore.analysis.verdict import QUIET_CORRELATION, Verdict
 
 PC_COLOURS = (QColor(30, 90, 200), QColor(220, 80, 20), QColor(40, 150, 60))
 VERDICT_COLOURS = {Verdict.USABLE: "#1a7f1a", Verdict.TRY_SKETCHING: "#b36b00",

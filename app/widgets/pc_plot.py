@@ -58,24 +58,7 @@ class PCPlotWidget(QWidget):
         self._state = state
         self._coords = np.zeros((0, 2))
         self._first = 0  # source frame of the first row of _coords
-        self.plot = pg.PlotWidget()
-        self.plot.setLabel("bottom", "PC1")
-        self.plot.setLabel("left", "PC2")
-        self.plot.setAspectLocked(True)
-        self.plot.showGrid(x=True, y=True, alpha=0.2)
-        self.plot.setMenuEnabled(False)
-        self._line = pg.PlotCurveItem(pen=pg.mkPen(QColor(170, 170, 170), width=1))
-        self._points = pg.ScatterPlotItem(size=7, pen=None, hoverable=True, tip=self._tip)
-        self._alternates = pg.ScatterPlotItem(size=16, symbol="d", pen=ALT_PEN, brush=None)
-        self._keys = pg.ScatterPlotItem(size=18, symbol="o", pen=KEY_PEN, brush=None)
-        self._cursor = pg.ScatterPlotItem(size=16, symbol="+", pen=pg.mkPen("r", width=3))
-        self._selected = pg.ScatterPlotItem(size=26, symbol="o", pen=pg.mkPen("r", width=2), brush=None)
-        for item in (self._line, self._points, self._alternates, self._keys, self._selected, self._cursor):
-            self.plot.addItem(item)
-        self._labels: list[pg.TextItem] = []
-        # Markers lie on top of the points and take their clicks: all carry frame numbers.
-        for item in (self._points, self._alternates, self._keys, self._selected, self._cursor):
-            item.sigClicked.connect(self._on_clicked)
+        self._build_plot()
 
         self.pcs = QSpinBox(minimum=1, maximum=MAX_PCS, prefix="PCs: ")
         self.keys = QSpinBox(minimum=1, maximum=MAX_KEYS, prefix="keys: ")
@@ -119,6 +102,27 @@ class PCPlotWidget(QWidget):
         state.selectedKeyChanged.connect(self._show_selected)
         self._sync_controls()
         self._on_analysis(None)
+
+    def _build_plot(self) -> None:
+        """The PC1 x PC2 plot: the loop, its frames, the keys, alternates and the cursor."""
+        self.plot = pg.PlotWidget()
+        self.plot.setLabel("bottom", "PC1")
+        self.plot.setLabel("left", "PC2")
+        self.plot.setAspectLocked(True)
+        self.plot.showGrid(x=True, y=True, alpha=0.2)
+        self.plot.setMenuEnabled(False)
+        self._line = pg.PlotCurveItem(pen=pg.mkPen(QColor(170, 170, 170), width=1))
+        self._points = pg.ScatterPlotItem(size=7, pen=None, hoverable=True, tip=self._tip)
+        self._alternates = pg.ScatterPlotItem(size=16, symbol="d", pen=ALT_PEN, brush=None)
+        self._keys = pg.ScatterPlotItem(size=18, symbol="o", pen=KEY_PEN, brush=None)
+        self._cursor = pg.ScatterPlotItem(size=16, symbol="+", pen=pg.mkPen("r", width=3))
+        self._selected = pg.ScatterPlotItem(size=26, symbol="o", pen=pg.mkPen("r", width=2), brush=None)
+        for item in (self._line, self._points, self._alternates, self._keys, self._selected, self._cursor):
+            self.plot.addItem(item)
+        self._labels: list[pg.TextItem] = []
+        # Markers lie on top of the points and take their clicks: all carry frame numbers.
+        for item in (self._points, self._alternates, self._keys, self._selected, self._cursor):
+            item.sigClicked.connect(self._on_clicked)
 
     # -- queries for tests and benchmarks -----------------------------------------------------
     def point_xy(self, frame: int) -> tuple[float, float]:

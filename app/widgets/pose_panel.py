@@ -72,6 +72,26 @@ class PosePanel(QWidget):
             self.spins[ch] = box
         self._form = form
 
+        grid = self._build_buttons(posing)
+
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(4, 4, 4, 4)
+        layout.addWidget(self.info)
+        layout.addWidget(self.frames)
+        layout.addWidget(self.joints, 1)
+        layout.addLayout(form)
+        layout.addLayout(grid)
+
+        self.frames.itemClicked.connect(lambda item: state.set_frame(item.data(Qt.ItemDataRole.UserRole)))
+        self.joints.currentItemChanged.connect(self._on_joint_clicked)
+        state.projectChanged.connect(self.sync)
+        state.analysisChanged.connect(self.sync)
+        state.frameChanged.connect(self.sync)
+        state.selectedJointChanged.connect(self.sync)
+        self.sync()
+
+    def _build_buttons(self, posing: PosingController) -> QGridLayout:
+        """The pose edits and imports as buttons, two per row, in :attr:`buttons`."""
         self.buttons: dict[str, QPushButton] = {}
         grid = QGridLayout()
         actions = [
@@ -93,22 +113,7 @@ class PosePanel(QWidget):
         self.buttons["mirror_key"].setToolTip("Pose this alternate as the mirror of its key (walks)")
         self.buttons["load_rig"].setToolTip("Pose another skeleton; poses are dropped unless its "
                                             "channels are the same")
-
-        layout = QVBoxLayout(self)
-        layout.setContentsMargins(4, 4, 4, 4)
-        layout.addWidget(self.info)
-        layout.addWidget(self.frames)
-        layout.addWidget(self.joints, 1)
-        layout.addLayout(form)
-        layout.addLayout(grid)
-
-        self.frames.itemClicked.connect(lambda item: state.set_frame(item.data(Qt.ItemDataRole.UserRole)))
-        self.joints.currentItemChanged.connect(self._on_joint_clicked)
-        state.projectChanged.connect(self.sync)
-        state.analysisChanged.connect(self.sync)
-        state.frameChanged.connect(self.sync)
-        state.selectedJointChanged.connect(self.sync)
-        self.sync()
+        return grid
 
     # -- for tests and the viewport ------------------------------------------------------------
     def select_joint(self, name: str) -> None:

@@ -23,7 +23,8 @@ from enum import Enum
 import numpy as np
 
 from gaitcore.analysis.cycles import Cycle, repeat_distance
-from gaitcore.analysis.spectrum import MIN_CYCLES, Diagnosis, Verdict
+from gaitcore.analysis.spectrum import Diagnosis
+from gaitcore.analysis.verdict import MIN_CYCLES, Verdict
 from gaitcore.silhouettes.tracking import RoiClip
 
 AREA_JUMP = 0.25

@@ -24,7 +24,8 @@ from gaitcore.analysis.cycles import Cycle, find_cycles
 from gaitcore.analysis.image_pca import ImagePCA
 from gaitcore.analysis.kernel import DEFAULT_ALPHA
 from gaitcore.analysis.keyimages import KeySelection, select_key_images
-from gaitcore.analysis.spectrum import Diagnosis, Verdict, diagnose
+from gaitcore.analysis.spectrum import Diagnosis, diagnose
+from gaitcore.analysis.verdict import Verdict
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Progress
 from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiClip, stabilize_rois

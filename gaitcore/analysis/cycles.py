@@ -36,7 +36,8 @@ import cv2
 import numpy as np
 
 from gaitcore.analysis.image_pca import ImagePCA
-from gaitcore.analysis.spectrum import MIN_FRAMES, PERIODICITY_ALPHA, Verdict, diagnose
+from gaitcore.analysis.spectrum import MIN_FRAMES, diagnose
+from gaitcore.analysis.verdict import PERIODICITY_ALPHA, Verdict
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Progress, report
 from gaitcore.silhouettes.tracking import RoiClip, stabilize_rois

@@ -18,7 +18,8 @@ from gaitcore.animation.animate import animate
 from gaitcore.bench.blend_floor import blend_floor
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Progress
-from gaitcore.rig.skeleton import Skeleton, load_template
+from gaitcore.rig.skeleton import Skeleton
+from gaitcore.rig.templates import load_template
 from gaitcore.silhouettes.tracking import crop_rois
 
 

@@ -168,7 +168,7 @@ def generate_gait(skeleton: Skeleton, gait: str, n_frames: int, *,
     Parameters
     ----------
     skeleton : Skeleton
-        The horse template (:func:`gaitcore.rig.skeleton.load_template` ``("horse")``) or any
+        The horse template (:func:`gaitcore.rig.templates.load_template` ``("horse")``) or any
         skeleton with the same leg joint names (``L_``/``R_`` + FORE_CHAIN, HIND_CHAIN),
         ``spine3`` and the named trunk channels.
     gait : {"walk", "trot", "canter", "gallop"}

@@ -14,7 +14,7 @@ import numpy as np
 from gaitcore.bench.gaits import generate_gait
 from gaitcore.errors import GaitInputError
 from gaitcore.rig.render import SkeletonRenderer
-from gaitcore.rig.skeleton import load_template
+from gaitcore.rig.templates import load_template
 
 
 @dataclass(frozen=True)

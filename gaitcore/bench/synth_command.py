@@ -93,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
     from gaitcore.bench.gaits import generate_gait
     from gaitcore.io.pose_table import PoseTable, write_pose_table
     from gaitcore.rig.render import iter_render
-    from gaitcore.rig.skeleton import load_template
+    from gaitcore.rig.templates import load_template
 
     _check(args)
     skeleton = load_template("horse")

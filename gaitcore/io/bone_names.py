@@ -37,7 +37,7 @@ def bone_names(skeleton: Skeleton, naming: str = "as-is") -> tuple[str, ...]:
 
     Examples
     --------
-    >>> from gaitcore.rig.skeleton import load_template
+    >>> from gaitcore.rig.templates import load_template
     >>> bone_names(load_template("horse"), "rigify")[-1]
     'hind_toe.L'
     """

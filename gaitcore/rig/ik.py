@@ -161,7 +161,7 @@ def solve_leg(skeleton: Skeleton, pose: np.ndarray, end_joint: str, target_xyz: 
 
     Examples
     --------
-    >>> from gaitcore.rig.skeleton import load_template
+    >>> from gaitcore.rig.templates import load_template
     >>> horse = load_template("horse")
     >>> toe = horse.joint_positions(horse.rest_pose())[horse.joint_index("L_fore_toe")]
     >>> result = solve_leg(horse, horse.rest_pose(), "L_fore_toe", toe + [0.05, 0.05, 0.0])

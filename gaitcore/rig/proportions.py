@@ -104,7 +104,7 @@ def proportioned(skeleton: Skeleton, proportions: RigProportions) -> Skeleton:
 
     Examples
     --------
-    >>> from gaitcore.rig.skeleton import load_template
+    >>> from gaitcore.rig.templates import load_template
     >>> horse = load_template("horse")
     >>> tall = proportioned(horse, RigProportions(legs=1.2))
     >>> bool(tall.offsets[0, 1] > horse.offsets[0, 1])

@@ -22,7 +22,6 @@ import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
-from importlib.resources import files
 from pathlib import Path
 from typing import Any
 
@@ -117,7 +116,7 @@ class BoneEllipsoid:
 class Skeleton:
     """A validated joint hierarchy (parents listed before children).
 
-    Build one with :meth:`from_json` or :func:`load_template`.
+    Build one with :meth:`from_json` or :func:`gaitcore.rig.templates.load_template`.
 
     Attributes
     ----------
@@ -384,25 +383,6 @@ class Skeleton:
             if ch in ("tz", "rx", "ry"):
                 sign[i] = -1.0
         return perm, sign
-
-
-def load_template(name: str) -> Skeleton:
-    """Load a built-in skeleton template from ``resources/skeletons/<name>.json``.
-
-    The templates install inside the package (``gaitcore.resources``) and are read through
-    :mod:`importlib.resources`, so an installed wheel finds them as a checkout does.
-
-    Raises
-    ------
-    GaitInputError
-        No template of that name; the message lists the available ones.
-    """
-    folder = files("gaitcore.resources") / "skeletons"
-    path = folder / f"{name}.json"
-    if not path.is_file():
-        have = sorted(p.name.removesuffix(".json") for p in folder.iterdir())
-        raise GaitInputError(f"no skeleton template {name!r}; available: {', '.join(have)}")
-    return Skeleton.from_json(path)
 
 
 def _parse_joint(item: JsonValue) -> Joint:

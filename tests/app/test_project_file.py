@@ -169,7 +169,7 @@ def test_pinning_a_dropped_frame_allows_it():
 
 
 def test_the_posed_skeleton_and_poses_survive_a_round_trip(tmp_path):
-    from gaitcore.rig.skeleton import load_template
+    from gaitcore.rig.templates import load_template
 
     skeleton = load_template("horse")
     pose = np.linspace(-5, 5, skeleton.n_channels)

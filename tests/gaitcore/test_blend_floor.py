@@ -60,7 +60,7 @@ def test_lower_bound_never_exceeds_the_exact_floor(seed, n, k, m):
 
 def test_bound_is_close_on_a_gait():
     from gaitcore.bench.gaits import generate_gait
-    from gaitcore.rig.skeleton import load_template
+    from gaitcore.rig.templates import load_template
 
     horse = load_template("horse")
     truth = generate_gait(horse, "gallop", 48, period_frames=12)[:, horse.sagittal_angle_indices]

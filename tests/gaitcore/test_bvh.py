@@ -8,7 +8,7 @@ from gaitcore.bench.gaits import generate_gait
 from gaitcore.io.bvh.writer import write_bvh
 from gaitcore.io.pose_table import PoseTable
 from gaitcore.rig.rotations import euler_zxy_matrix
-from gaitcore.rig.skeleton import load_template
+from gaitcore.rig.templates import load_template
 
 bvhio = pytest.importorskip("bvhio")
 

@@ -15,7 +15,8 @@ from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.bvh.writer import write_bvh
 from gaitcore.io.pose_table import PoseTable
 from gaitcore.rig.rotations import euler_zxy_matrix, zxy_from_matrix
-from gaitcore.rig.skeleton import Skeleton, load_template
+from gaitcore.rig.skeleton import Skeleton
+from gaitcore.rig.templates import load_template
 
 HORSE = load_template("horse")
 

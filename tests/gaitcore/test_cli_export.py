@@ -20,7 +20,7 @@ from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.export import EXPORTERS, export_animation, write_preview_video
 from gaitcore.io.pose_table import PoseTable, read_pose_table
 from gaitcore.progress import Cancelled
-from gaitcore.rig.skeleton import load_template
+from gaitcore.rig.templates import load_template
 from tests.gaitcore.walker import walker_clip, write_mask_folder
 
 bvhio = pytest.importorskip("bvhio")

@@ -7,7 +7,7 @@ from gaitcore import GaitInputError
 from gaitcore.bench.gaits import GAITS, generate_gait, stance_mask
 from gaitcore.progress import Cancelled
 from gaitcore.rig.contact import ContactSettings, clean_ground_contact, find_feet
-from gaitcore.rig.skeleton import load_template
+from gaitcore.rig.templates import load_template
 
 FRAMES = 60
 

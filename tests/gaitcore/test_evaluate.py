@@ -15,7 +15,7 @@ from gaitcore.bench.evaluate import BenchSettings, evaluate_gait
 from gaitcore.bench.gaits import generate_gait
 from gaitcore.cli import main
 from gaitcore.errors import GaitInputError
-from gaitcore.rig.skeleton import load_template
+from gaitcore.rig.templates import load_template
 
 pytestmark = pytest.mark.gl
 

@@ -7,7 +7,7 @@ import pytest
 
 from gaitcore.project.document import FootageFit, Silhouettes
 from gaitcore.project.footage_fit import reference_image, skeleton_extent
-from gaitcore.rig.skeleton import load_template
+from gaitcore.rig.templates import load_template
 from gaitcore.silhouettes.tracking import crop_rois
 from tests.gaitcore.walker import walker_clip
 

@@ -16,7 +16,7 @@ import pytest
 
 from gaitcore.cli import main
 from gaitcore.io.pose_table import PoseTable, write_pose_table
-from gaitcore.rig.skeleton import load_template
+from gaitcore.rig.templates import load_template
 from tests.fuzzing import DEFAULT_CASES, FUZZ_CASES, SPECIAL_NUMBERS
 
 VALUES = SPECIAL_NUMBERS + ("-1", "0", "", "abc", "1,2", "-10,-10,50,50", "1e300", "nan",

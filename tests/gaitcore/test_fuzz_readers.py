@@ -24,7 +24,8 @@ from gaitcore.io.bvh.writer import write_bvh
 from gaitcore.io.pose_table import PoseTable, read_pose_table, write_pose_table
 from gaitcore.project.document import Project, Silhouettes
 from gaitcore.project.storage import load_project, save_project, sidecar_dir
-from gaitcore.rig.skeleton import Skeleton, load_template
+from gaitcore.rig.skeleton import Skeleton
+from gaitcore.rig.templates import load_template
 from gaitcore.schema import MAX_FPS
 from gaitcore.silhouettes.annotations import Rect, Stroke
 from gaitcore.silhouettes.tracking import RoiClip

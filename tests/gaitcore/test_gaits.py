@@ -7,7 +7,8 @@ import pytest
 
 from gaitcore.bench import GAITS, generate_gait
 from gaitcore.errors import GaitInputError
-from gaitcore.rig.skeleton import Skeleton, load_template
+from gaitcore.rig.skeleton import Skeleton
+from gaitcore.rig.templates import load_template
 
 TOES = {"LH": "L_hind_toe", "LF": "L_fore_toe", "RH": "R_hind_toe", "RF": "R_fore_toe"}
 FINE = 100  # frames per cycle for timing measurements

@@ -14,7 +14,8 @@ from gaitcore.bench.gaits import generate_gait
 from gaitcore.errors import GaitInputError
 from gaitcore.io.gltf import write_glb
 from gaitcore.rig.rotations import euler_zxy_matrix, quaternions_zxy
-from gaitcore.rig.skeleton import Skeleton, load_template
+from gaitcore.rig.skeleton import Skeleton
+from gaitcore.rig.templates import load_template
 
 HORSE = load_template("horse")
 N_FRAMES, FPS = 30, 25.0

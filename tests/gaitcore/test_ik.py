@@ -5,7 +5,8 @@ import pytest
 
 from gaitcore import GaitInputError
 from gaitcore.rig.ik import leg_joints, solve_chain, solve_leg
-from gaitcore.rig.skeleton import Skeleton, load_template
+from gaitcore.rig.skeleton import Skeleton
+from gaitcore.rig.templates import load_template
 
 
 def _arm(knee_limits=None) -> Skeleton:

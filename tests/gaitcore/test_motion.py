@@ -6,7 +6,7 @@ import pytest
 from gaitcore import GaitInputError
 from gaitcore.bench.gaits import GAITS, generate_gait
 from gaitcore.io.motion import export_motion
-from gaitcore.rig.skeleton import load_template
+from gaitcore.rig.templates import load_template
 
 FRAMES = 40
 

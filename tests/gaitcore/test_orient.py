@@ -10,7 +10,8 @@ from gaitcore.io.bvh.writer import write_bvh
 from gaitcore.io.pose_table import PoseTable
 from gaitcore.project.steps import read_rig
 from gaitcore.rig.orient import axis_vector, guess_axes, reoriented
-from gaitcore.rig.skeleton import Skeleton, load_template
+from gaitcore.rig.skeleton import Skeleton
+from gaitcore.rig.templates import load_template
 
 
 def written_as(skeleton: Skeleton, path, *, up: str, forward: str, unit_m: float,

@@ -7,7 +7,7 @@ import pytest
 
 from gaitcore.errors import GaitInputError
 from gaitcore.rig.proportions import RigProportions, body_parts, proportioned
-from gaitcore.rig.skeleton import load_template
+from gaitcore.rig.templates import load_template
 
 
 @pytest.fixture(scope="module")

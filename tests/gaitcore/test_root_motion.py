@@ -10,7 +10,7 @@ from gaitcore.animation.root_motion import (
     key_velocity,
 )
 from gaitcore.bench.gaits import GAITS, generate_gait
-from gaitcore.rig.skeleton import load_template
+from gaitcore.rig.templates import load_template
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,8 @@ import pytest
 
 from gaitcore.errors import GaitInputError
 from gaitcore.rig.rotations import euler_zxy_matrix
-from gaitcore.rig.skeleton import Skeleton, load_template
+from gaitcore.rig.skeleton import Skeleton
+from gaitcore.rig.templates import load_template
 
 
 @pytest.fixture(scope="module")

@@ -8,7 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from gaitcore.analysis.spectrum import Diagnosis, Verdict, band_pass, diagnose, fisher_periodicity_p
+from gaitcore.analysis.spectrum import Diagnosis, band_pass, diagnose, fisher_periodicity_p
+from gaitcore.analysis.verdict import Verdict
 from gaitcore.errors import GaitInputError
 
 

@@ -14,7 +14,8 @@ from gaitcore.bench import GAITS, generate_gait
 from gaitcore.bench.synth_command import add_parser
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Cancelled
-from gaitcore.rig.skeleton import Skeleton, load_template
+from gaitcore.rig.skeleton import Skeleton
+from gaitcore.rig.templates import load_template
 
 pytestmark = pytest.mark.gl
 

@@ -58,7 +58,7 @@ def test_bad_ranges_are_one_line(masks, tmp_path, capsys):
 def test_bvh_frame_time_has_ten_significant_digits(tmp_path):
     from gaitcore.io.bvh.writer import write_bvh
     from gaitcore.io.pose_table import PoseTable
-    from gaitcore.rig.skeleton import load_template
+    from gaitcore.rig.templates import load_template
 
     skeleton = load_template("horse")
     table = PoseTable(np.arange(2), skeleton.channel_names, np.zeros((2, len(skeleton.channel_names))))
