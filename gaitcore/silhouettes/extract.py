@@ -117,9 +117,9 @@ def load_silhouettes(
     def write_mask(index: int, mask: np.ndarray) -> None:
         cv2.imwrite(str(mask_dir / f"{start + index:05d}.png"), mask)
 
-    if start:  # the clip starts at the range: scribbles are numbered by source frame
-        scribbles = [replace(s, frame=s.frame - start) for s in scribbles
-                     if start <= s.frame < (stop if stop is not None else s.frame + 1)]
+    if start or stop is not None:  # scribbles are numbered by source frame, the clip by row
+        end = float("inf") if stop is None else stop
+        scribbles = [replace(s, frame=s.frame - start) for s in scribbles if start <= s.frame < end]
     with open_frames(source, start=start, stop=stop) as frames:
         return segment_clip(frames, list(subject), list(background), box=box,
                             scribbles=scribbles, method=method, progress=progress,

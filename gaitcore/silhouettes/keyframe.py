@@ -13,7 +13,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from gaitcore.silhouettes.propagate import Box, Cut, PropagationSettings, disk, keep_touching
+from gaitcore.silhouettes.propagate import TOUCHING, Box, Cut, PropagationSettings, disk
+from gaitcore.silhouettes.tracking import keep_overlapping
 
 
 def _grabcut(image: np.ndarray, labels: np.ndarray, iters: int) -> np.ndarray:
@@ -151,7 +152,7 @@ def _cut_labels(small: np.ndarray, box: Box | None, moving: np.ndarray | None,
         if n <= 1:
             return mask
         anchor = comp == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-    return keep_touching(mask, anchor)
+    return keep_overlapping(mask, anchor, least=TOUCHING)
 
 
 def _spans(mask: np.ndarray, box: Box, least: float = 0.6) -> bool:
@@ -218,7 +219,8 @@ def cut_with_prior(small: np.ndarray, prior: np.ndarray, *, subject: np.ndarray 
         labels[background] = cv2.GC_BGD
     if hard:
         labels[subject] = cv2.GC_FGD
-    mask = keep_touching(_grabcut(small, labels, iters), subject if hard else inside)
+    mask = keep_overlapping(_grabcut(small, labels, iters), subject if hard else inside,
+                            least=TOUCHING)
     area, prior_area = float(mask.sum()), float(inside.sum())
     agree = float((mask & inside).sum()) / max(float((mask | inside).sum()), 1.0)
     touched = hard or (background is not None and background.any())

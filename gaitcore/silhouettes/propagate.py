@@ -25,11 +25,17 @@ import numpy as np
 
 from gaitcore.errors import GaitInputError
 from gaitcore.silhouettes.colour_model import ColourTable
+from gaitcore.silhouettes.tracking import keep_overlapping
 
 _PRESETS = {"ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST,
             "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
             "medium": cv2.DISOPTICAL_FLOW_PRESET_MEDIUM}
 Box = tuple[int, int, int, int]  # x, y, w, h
+
+
+TOUCHING = 0.02
+"""A component is kept when its overlap with the prediction is at least this share of the best
+one's: a leg cut off from the body by a shadow still touches it."""
 
 
 @dataclass(frozen=True)
@@ -199,23 +205,6 @@ def disk(r: int) -> np.ndarray:
     return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
 
 
-def keep_touching(mask: np.ndarray, reference: np.ndarray, *, least: float = 0.02) -> np.ndarray:
-    """The components of ``mask`` (0/1) that overlap ``reference`` by at least ``least`` of
-    the best overlap; the largest component when none does."""
-    n, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
-    if n <= 2:
-        return mask.astype(np.uint8)
-    overlap = np.bincount(labels[reference > 0], minlength=n)
-    overlap[0] = 0
-    if overlap.max() == 0:
-        overlap = np.bincount(labels.ravel(), minlength=n)
-        overlap[0] = 0
-        return (labels == int(np.argmax(overlap))).astype(np.uint8)
-    keep = overlap >= least * overlap.max()
-    keep[0] = False
-    return keep[labels].astype(np.uint8)
-
-
 def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
               flow_of: cv2.DISOpticalFlow, settings: PropagationSettings
               ) -> tuple[np.ndarray, tuple[int, int, int, int]]:
@@ -300,7 +289,7 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, colours: ColourTable,
     evidence = colours(small) + settings.prior_weight * np.log(p / (1 - p))
     evidence = cv2.ximgproc.guidedFilter(np.ascontiguousarray(small), evidence,
                                          max(1, round(settings.smooth_frac * side)), 4.0)
-    mask = keep_touching((evidence > 0).astype(np.uint8), inside)
+    mask = keep_overlapping((evidence > 0).astype(np.uint8), inside, least=TOUCHING)
     area, prior_area = float(mask.sum()), float(inside.sum())
     if area < settings.max_shrink * prior_area and np.median(evidence[inside > 0]) < 0:
         return Cut(np.zeros_like(inside), 0.0)  # nothing there looks like the subject: gone

@@ -25,16 +25,17 @@ from gaitcore.silhouettes.annotations import Rect, Scribble
 from gaitcore.silhouettes.colour_model import ColourModel, check_frame, learn_colours, rect_mask
 from gaitcore.silhouettes.keyframe import cut_first, cut_with_prior, motion_residual
 from gaitcore.silhouettes.propagate import (
+    TOUCHING,
     Cut,
     PropagationSettings,
     WorkingSize,
     find_again,
     fuse_cut,
-    keep_touching,
     make_flow,
     warp_mask,
 )
 from gaitcore.silhouettes.sketch import rasterize_strokes
+from gaitcore.silhouettes.tracking import keep_overlapping
 
 _CHUNK = 64  # frames decoded at once for a backward pass
 
@@ -274,8 +275,9 @@ class RotoSegmentation:
         model = ColourModel.fit(small, [_scaled(r, self.work.scale) for r in self.subject_rects],
                                 [_scaled(r, self.work.scale) for r in self.background_rects])
         guess = ((model.posterior(small) > 127) & ~bg) | fg
-        guess = keep_touching(cv2.morphologyEx(guess.astype(np.uint8), cv2.MORPH_OPEN,
-                                               np.ones((3, 3), np.uint8)) | fg, fg)
+        guess = keep_overlapping(cv2.morphologyEx(guess.astype(np.uint8), cv2.MORPH_OPEN,
+                                                  np.ones((3, 3), np.uint8)) | fg, fg,
+                                 least=TOUCHING)
         x, y, w, h = cv2.boundingRect(guess)
         pad_x, pad_y = round(0.1 * w) + 2, round(0.1 * h) + 2
         x0, y0 = max(0, x - pad_x), max(0, y - pad_y)

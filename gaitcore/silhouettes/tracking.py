@@ -393,7 +393,8 @@ def fill_holes(mask: np.ndarray) -> np.ndarray:
     return (mask | (1 - flood[1:-1, 1:-1])).astype(np.uint8)
 
 
-def keep_overlapping(mask: np.ndarray, reference: np.ndarray) -> np.ndarray:
+def keep_overlapping(mask: np.ndarray, reference: np.ndarray, *,
+                     least: float | None = None) -> np.ndarray:
     """The connected component of ``mask`` that overlaps ``reference`` most.
 
     Parameters
@@ -401,12 +402,16 @@ def keep_overlapping(mask: np.ndarray, reference: np.ndarray) -> np.ndarray:
     mask : ndarray of shape (rows, cols), uint8 (0/1)
     reference : ndarray of shape (rows, cols)
         E.g. the silhouette predicted from the previous frame (non-zero is inside).
+    least : float, optional
+        Keep every component whose overlap is at least this share of the best one's
+        (a leg cut off by a shadow still touches the prediction), not only the best.
 
     Returns
     -------
     ndarray of shape (rows, cols), uint8 (0/1)
-        That component; the largest one when none overlaps.
+        That component (or those); the largest one when none overlaps.
     """
+    mask = np.asarray(mask, dtype=np.uint8)
     n, labels = cv2.connectedComponents(mask, connectivity=8)
     if n <= 2:
         return mask
@@ -415,6 +420,10 @@ def keep_overlapping(mask: np.ndarray, reference: np.ndarray) -> np.ndarray:
     if overlap.max() == 0:
         overlap = np.bincount(labels.ravel(), minlength=n)
         overlap[0] = 0
+    elif least is not None:
+        keep = overlap >= least * overlap.max()
+        keep[0] = False
+        return keep[labels].astype(np.uint8)
     return (labels == int(np.argmax(overlap))).astype(np.uint8)
 
 
