@@ -71,6 +71,14 @@ class AddRectCommand(ProjectCommand):
                          f"add {kind} rectangle", frame=0)
 
 
+class SetBoxCommand(ProjectCommand):
+    """Draw the box around the animal on the first frame (it replaces the previous one)."""
+
+    def __init__(self, state: AppState, box: Rect) -> None:
+        super().__init__(state, replace(state.project, box=box), "draw box around the animal",
+                         frame=0)
+
+
 class RemoveRectCommand(ProjectCommand):
     """Remove a subject or background rectangle."""
 

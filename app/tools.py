@@ -23,7 +23,7 @@ from gaitcore.project.steps import segment, sketched_silhouettes
 from gaitcore.silhouettes.annotations import Stroke
 from gaitcore.silhouettes.sketch import carry_strokes, propagate_strokes
 
-TOOL_KEYS = {Tool.NAVIGATE: "N", Tool.SUBJECT: "S", Tool.BACKGROUND: "B", Tool.DRAW: "D",
+TOOL_KEYS = {Tool.NAVIGATE: "N", Tool.BOX: "A", Tool.SUBJECT: "S", Tool.BACKGROUND: "B", Tool.DRAW: "D",
              Tool.ERASE: "E"}
 
 
@@ -89,10 +89,11 @@ class ToolsController(QObject):
         if source is None:
             self._documents.messageRaised.emit("open footage first")
             return None
-        if not project.subject_rects or not project.background_rects:
+        if project.box is None and not (project.subject_rects and project.background_rects):
             self._documents.asker.error(
-                "Segment clip", "Draw at least one subject rectangle (S) and one background "
-                "rectangle (B) on the first frame, then segment again.")
+                "Segment clip", "Draw a box around the animal (A) on the first frame, or at "
+                "least one subject rectangle (S) and one background rectangle (B), then "
+                "segment again.")
             return None
         if self._segmenting is not None:
             return self._segmenting

@@ -17,6 +17,7 @@ class Tool(Enum):
     """What a left drag on the frame does."""
 
     NAVIGATE = "navigate"
+    BOX = "box around the animal"
     SUBJECT = "subject rectangle"
     BACKGROUND = "background rectangle"
     DRAW = "draw"
@@ -24,7 +25,7 @@ class Tool(Enum):
 
     @property
     def draws_rect(self) -> bool:
-        return self in (Tool.SUBJECT, Tool.BACKGROUND)
+        return self in (Tool.BOX, Tool.SUBJECT, Tool.BACKGROUND)
 
     @property
     def draws_path(self) -> bool:

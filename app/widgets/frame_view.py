@@ -14,7 +14,13 @@ from PySide6.QtCore import QPointF, QRectF, Qt, Signal
 from PySide6.QtGui import QBrush, QColor, QPainterPath, QPen
 from PySide6.QtWidgets import QGraphicsPathItem, QGraphicsRectItem, QVBoxLayout, QWidget
 
-from app.commands import AddRectCommand, AddStrokesCommand, EraseStrokesCommand, RemoveRectCommand
+from app.commands import (
+    AddRectCommand,
+    AddStrokesCommand,
+    EraseStrokesCommand,
+    RemoveRectCommand,
+    SetBoxCommand,
+)
 from app.state import AppState
 from app.widgets.frame_canvas import CanvasViewBox, Tool
 from app.workers import FrameLoader
@@ -24,6 +30,7 @@ from gaitcore.silhouettes.annotations import Rect, Stroke
 TINT_RGBA = (0, 190, 255, 100)
 SUBJECT_COLOUR = QColor(40, 200, 60)
 BACKGROUND_COLOUR = QColor(220, 40, 200)
+BOX_COLOUR = QColor(255, 140, 0)
 STROKE_COLOUR = QColor(255, 200, 0)
 ONION_COLOUR = QColor(0, 160, 255, 110)
 ERASE_COLOUR = QColor(255, 40, 40)
@@ -165,7 +172,8 @@ class FrameView(QWidget):
         if frame < 0:
             return
         self._draw_silhouette(frame)
-        for rects, colour in ((project.subject_rects, SUBJECT_COLOUR),
+        box = () if project.box is None else (project.box,)
+        for rects, colour in ((box, BOX_COLOUR), (project.subject_rects, SUBJECT_COLOUR),
                               (project.background_rects, BACKGROUND_COLOUR)):
             for r in rects:
                 self._add_overlay(_rect_item(QRectF(r.x, r.y, r.w, r.h), colour), 3)
@@ -214,9 +222,11 @@ class FrameView(QWidget):
         self._live = [item]
 
     def _on_rect_dragged(self, rect: QRectF, finished: bool) -> None:
-        subject = self.canvas.tool is Tool.SUBJECT
+        tool = self.canvas.tool
+        subject = tool is Tool.SUBJECT
         if not finished:
-            self._set_live(_rect_item(rect, SUBJECT_COLOUR if subject else BACKGROUND_COLOUR))
+            colour = {Tool.BOX: BOX_COLOUR, Tool.SUBJECT: SUBJECT_COLOUR}.get(tool, BACKGROUND_COLOUR)
+            self._set_live(_rect_item(rect, colour))
             return
         self._clear_live()
         if rect.width() < 2 or rect.height() < 2 or self._state.n_frames == 0:
@@ -228,12 +238,16 @@ class FrameView(QWidget):
         except GaitInputError as exc:
             self.messageRaised.emit(str(exc))
             return
-        self._state.undo_stack.push(AddRectCommand(self._state, r, subject=subject))
+        if tool is Tool.BOX:
+            self._state.undo_stack.push(SetBoxCommand(self._state, r))
+        else:
+            self._state.undo_stack.push(AddRectCommand(self._state, r, subject=subject))
 
     def _on_rect_clicked(self, xy: QPointF) -> None:
         """A click inside a rectangle removes it (the last drawn one on top)."""
         project = self._state.project
-        for r in reversed(project.subject_rects + project.background_rects):
+        box = () if project.box is None else (project.box,)
+        for r in reversed(box + project.subject_rects + project.background_rects):
             if r.x <= xy.x() < r.x + r.w and r.y <= xy.y() < r.y + r.h:
                 self._state.undo_stack.push(RemoveRectCommand(self._state, r))
                 return

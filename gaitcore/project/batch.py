@@ -16,9 +16,9 @@ when complete, so a clip folder is either whole or absent. A clip that cannot be
 error. The summary of the whole batch (``summary.csv`` and ``summary.json``) is a list of
 :class:`ClipSummary` rows, in manifest order.
 
-A manifest row's box drives the one-box segmentation; the clip's project also keeps it as
-subject and background rectangles (:func:`box_rectangles`), so that the app can segment it
-again. ``cycle_start``/``cycle_stop`` are the best stretch the cycle finder ranks.
+A manifest row's box drives the one-box segmentation and stays in the clip's project, so
+that the app opens the clip with it. ``cycle_start``/``cycle_stop`` are the best stretch the
+cycle finder ranks.
 """
 
 from __future__ import annotations
@@ -39,7 +39,6 @@ from gaitcore.project.document import Project
 from gaitcore.project.manifest import ClipSpec, spec_from_dict
 from gaitcore.project.steps import analyze, open_source, segment, silhouettes_from_masks
 from gaitcore.project.storage import save_project, write_atomic
-from gaitcore.silhouettes.annotations import Rect
 from gaitcore.silhouettes.extract import is_mask_folder
 
 PROJECT_NAME = "clip.gaitproj"
@@ -157,31 +156,6 @@ def pending(spec: ClipSpec) -> ClipSummary:
     return ClipSummary(spec.clip, "pending", str(spec.path), spec)
 
 
-def box_rectangles(box: Rect, size_wh: tuple[int, int]) -> tuple[tuple[Rect, ...], tuple[Rect, ...]]:
-    """Subject and background rectangles that a box around the animal stands for.
-
-    The subject is the middle half of the box (mostly animal); the background is the frame
-    outside the box grown by a tenth of its size on each side. The one-box segmentation of
-    issue #11 replaces this mapping.
-
-    Raises
-    ------
-    GaitInputError
-        A box outside the frame, or one that leaves no background around it.
-    """
-    w, h = size_wh
-    b = box.clipped_to(w, h)
-    subject = (Rect(b.x + b.w // 4, b.y + b.h // 4, max(1, b.w // 2), max(1, b.h // 2)),)
-    x0, y0 = b.x - max(2, b.w // 10), b.y - max(2, b.h // 10)
-    x1, y1 = b.x + b.w + max(2, b.w // 10), b.y + b.h + max(2, b.h // 10)
-    bands = ((0, 0, w, y0), (0, y1, w, h - y1), (0, 0, x0, h), (x1, 0, w - x1, h))
-    background = tuple(Rect(*band) for band in bands if band[2] > 0 and band[3] > 0)
-    if not background:
-        raise GaitInputError(f"box {box.as_tuple()} covers the whole {w}x{h} frame: draw it "
-                             "tight around the animal so that background shows around it")
-    return subject, background
-
-
 def analyze_clip(spec: ClipSpec, out_dir: Path, *,
                  settings: AnalysisSettings = AnalysisSettings()) -> ClipSummary:
     """Analyse one clip and write its outputs to ``out_dir/<clip>/`` atomically.
@@ -211,9 +185,9 @@ def analyze_clip(spec: ClipSpec, out_dir: Path, *,
     tmp.mkdir(parents=True)
     try:
         project = Project(footage=spec.path, frame_start=spec.start, frame_stop=spec.stop,
-                          fps=spec.fps, subject_rects=spec.subject, background_rects=spec.background)
+                          fps=spec.fps, box=spec.box, subject_rects=spec.subject,
+                          background_rects=spec.background)
         try:
-            project = _with_box(spec, project)
             project = replace(project, silhouettes=_silhouettes(spec, project))
             analysis = analyze(project.silhouettes, settings, trim=project.trim)
             write_analysis_json(tmp / ANALYSIS_NAME, analysis, source=str(spec.path))
@@ -305,22 +279,13 @@ def read_summary(path: str | Path) -> tuple[ClipSummary, ...]:
 
 
 # -- helpers -----------------------------------------------------------------------------
-def _with_box(spec: ClipSpec, project: Project) -> Project:
-    """The project with the rectangles the box stands for (the footage's size is needed)."""
-    if spec.box is None:
-        return project
-    with open_source(project) as source:
-        subject, background = box_rectangles(spec.box, source.size)
-    return replace(project, subject_rects=subject, background_rects=background)
-
-
 def _silhouettes(spec: ClipSpec, project: Project):
     """Tracked silhouettes of the whole clip (the cycle search looks at all of it; the trim
     limits the analysis): a mask folder is tracked, colour is segmented."""
     with open_source(project) as source:  # checks the footage
         if is_mask_folder(spec.path):
             return silhouettes_from_masks(spec.path)
-        return segment(source, project, box=spec.box)
+        return segment(source, project)
 
 
 def _done(spec: ClipSpec, analysis: Analysis) -> ClipSummary:
@@ -363,6 +328,6 @@ def _opt(value, kind):
 
 
 __all__ = [
-    "ClipSummary", "SUMMARY_COLUMNS", "analyze_clip", "box_rectangles", "failed",
+    "ClipSummary", "SUMMARY_COLUMNS", "analyze_clip", "failed",
     "finished_result", "pending", "read_summary", "remove_partial_folders", "write_summary",
 ]

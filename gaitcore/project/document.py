@@ -185,6 +185,9 @@ class Project:
         opened whole and every frame number of the project is a source frame number.
     fps : float or None
         Frame rate to use instead of the file's (image folders have none).
+    box : Rect or None
+        Around the animal on the first frame: enough to segment the clip (the GrabCut
+        convention); the rectangles are then not needed.
     subject_rects, background_rects : tuple of Rect
         Drawn on the first frame to seed the colour models (paper Section 2.2).
     strokes : tuple of Stroke
@@ -214,6 +217,7 @@ class Project:
     frame_start: int = 0
     frame_stop: int | None = None
     fps: float | None = None
+    box: Rect | None = None
     subject_rects: tuple[Rect, ...] = ()
     background_rects: tuple[Rect, ...] = ()
     strokes: tuple[Stroke, ...] = ()
@@ -279,13 +283,15 @@ class Project:
         return replace(self, background_rects=self.background_rects + (rect,))
 
     def without_rect(self, rect: Rect) -> Project:
-        """A copy without the first rectangle equal to ``rect`` (subject or background).
+        """A copy without the box, or else the first rectangle, equal to ``rect``.
 
         Raises
         ------
         GaitInputError
             When the project has no such rectangle.
         """
+        if rect == self.box:
+            return replace(self, box=None)
         for name in ("subject_rects", "background_rects"):
             rects = list(getattr(self, name))
             if rect in rects:

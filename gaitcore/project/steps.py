@@ -84,14 +84,15 @@ def silhouettes_from_masks(folder: Path, progress: Progress | None = None, *,
 def segment(source: FrameSource, project: Project, progress: Progress | None = None, *,
             box: Rect | None = None,
             mask_sink: Callable[[int, np.ndarray], None] | None = None) -> Silhouettes:
-    """Segment the whole clip from a box around the animal on the first frame, or from the
-    project's rectangles (paper Section 2.2).
+    """Segment the whole clip from a box around the animal on the first frame (``box``, else
+    the project's), or from the project's rectangles (paper Section 2.2).
 
     Raises
     ------
     GaitInputError
         No box and not a subject and a background rectangle, or no subject found.
     """
+    box = box or project.box
     if box is None and not (project.subject_rects and project.background_rects):
         raise GaitInputError("draw a box around the animal, or at least one subject and one "
                              "background rectangle, on the first frame, then segment again")

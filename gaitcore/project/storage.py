@@ -165,6 +165,7 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
         "frame_start": project.frame_start,
         "frame_stop": project.frame_stop,
         "fps": project.fps,
+        "box": None if project.box is None else list(project.box.as_tuple()),
         "subject_rects": [list(r.as_tuple()) for r in project.subject_rects],
         "background_rects": [list(r.as_tuple()) for r in project.background_rects],
         "strokes": [
@@ -195,6 +196,7 @@ def _from_json(doc: JsonValue, p: Path) -> Project:
         frame_start=start,
         frame_stop=stop,
         fps=doc.key("fps").number(lo=0, lo_open=True, hi=MAX_FPS, optional=True),
+        box=_box(doc.key("box", None)),
         subject_rects=_rects(doc.key("subject_rects")),
         background_rects=_rects(doc.key("background_rects")),
         strokes=tuple(_stroke(s) for s in doc.key("strokes").items(max_len=MAX_STROKES)),
@@ -229,6 +231,16 @@ def _rects(entry: JsonValue) -> tuple[Rect, ...]:
             raise item.fail("a rectangle [x, y, w, h] of positive width and height")
         out.append(Rect(x, y, w, h))
     return tuple(out)
+
+
+def _box(entry: JsonValue) -> Rect | None:
+    """The box around the animal, or None (projects saved before it existed have none)."""
+    if entry.is_null():
+        return None
+    x, y, w, h = entry.integers(length=4, lo=-MAX_PIXELS, hi=MAX_PIXELS)
+    if w <= 0 or h <= 0:
+        raise entry.fail("a box [x, y, w, h] of positive width and height, or null")
+    return Rect(x, y, w, h)
 
 
 def _stroke(entry: JsonValue) -> Stroke:

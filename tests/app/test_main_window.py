@@ -311,3 +311,29 @@ def test_a_segmentation_started_on_one_clip_never_lands_in_the_next(qtbot, windo
     assert not opened.subject_rects and opened.silhouettes is not None
     assert opened.silhouettes.origin == "masks"  # the tracked masks, not the old clip's cut-out
     assert window.state.undo_stack.count() == 0
+
+
+def test_one_box_around_the_animal_is_enough_to_segment(qtbot, window, canter_clip, tmp_path,
+                                                        artifacts_dir):
+    window.open_path(canter_clip / "images")
+    wait_ready(qtbot, window)
+    choose_tool(window, Tool.BOX)
+    drag(qtbot, window, [(6, 36), (200, 150), (312, 232)])
+    box = window.state.project.box
+    assert box is not None and not window.state.project.subject_rects
+    assert abs(box.x - 6) <= 2 and abs(box.w - 306) <= 3
+    job = window.tools.segment()
+    with qtbot.waitSignal(job.succeeded, timeout=60_000):
+        pass
+    wait_ready(qtbot, window)
+    silhouettes = window.state.project.silhouettes
+    assert silhouettes.origin == "segmented" and silhouettes.roi.lost.sum() <= 2
+    assert window.state.analysis.diagnosis.correlations[0] > 0.6
+    window.grab().save(str(artifacts_dir / "app_segmented_from_box.png"))
+    path = tmp_path / "boxed.gaitproj"
+    assert window.documents._save_to(path)
+    assert load_project(path).box == box
+    stack = window.state.undo_stack
+    stack.undo()  # the segmentation
+    stack.undo()  # the box
+    assert window.state.project.box is None

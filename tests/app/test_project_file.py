@@ -359,3 +359,17 @@ def test_rig_proportions_default_for_older_files_and_are_checked(tmp_path):
     (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
     with pytest.raises(GaitInputError, match="damaged"):
         load_project(tmp_path / "p.gaitproj")
+
+
+def test_the_box_around_the_animal_is_saved_and_older_files_have_none(tmp_path):
+    path = tmp_path / "p.gaitproj"
+    save_project(Project(box=Rect(10, 20, 300, 150)), path)
+    assert load_project(path).box == Rect(10, 20, 300, 150)
+    doc = json.loads(path.read_text())
+    del doc["box"]  # saved before the box existed
+    path.write_text(json.dumps(doc))
+    assert load_project(path).box is None
+    doc["box"] = [10, 20, 0, 150]
+    path.write_text(json.dumps(doc))
+    with pytest.raises(GaitInputError, match="box"):
+        load_project(path)

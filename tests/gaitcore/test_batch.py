@@ -13,7 +13,6 @@ from gaitcore.errors import GaitInputError
 from gaitcore.project.batch import (
     ClipSummary,
     analyze_clip,
-    box_rectangles,
     finished_result,
     pending,
     read_summary,
@@ -92,16 +91,6 @@ def test_the_command_exits_2_with_one_line_for_a_bad_manifest(tmp_path, capsys):
     assert main(["batch", str(only_bad), "--out", str(tmp_path / "out")]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
     assert "line 2: missing.mp4 does not exist" in lines[0] and "none of the 1 rows" in lines[1]
-
-
-def test_box_stands_for_the_middle_as_subject_and_the_outside_as_background():
-    box = Rect(40, 30, 80, 40)
-    subject, background = box_rectangles(box, (200, 120))
-    assert subject == (Rect(60, 40, 40, 20),)
-    for r in background:  # background never overlaps the box
-        assert r.x + r.w <= box.x or r.x >= box.x + box.w or r.y + r.h <= box.y or r.y >= box.y + box.h
-    with pytest.raises(GaitInputError, match="covers the whole"):
-        box_rectangles(Rect(0, 0, 200, 120), (200, 120))
 
 
 def test_analyze_clip_writes_a_whole_folder_and_a_done_row(masks, tmp_path):
