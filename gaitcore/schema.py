@@ -437,3 +437,12 @@ def read_npy(path: str | os.PathLike, *, what: str, kind: str, ndim: int,
     if got != nbytes:
         raise GaitInputError(f"{what} {p} is truncated; restore it from a backup")
     return flat.reshape(shape, order="F" if fortran else "C")
+
+
+def is_number(text: str) -> bool:
+    """Whether ``text`` reads as a number (a cell of a CSV or BVH motion line)."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

@@ -226,14 +226,7 @@ class FrameSource:
             else:
                 if self._reader is None:
                     self._reader = _VideoReader(self.path, self._timestamps_ms)
-                img = self._reader.read(self.start + i)
-                if img is None:
-                    raise GaitInputError(
-                        f"frame {self.start + i} of {self.path} cannot be decoded any more (it "
-                        "did when the file was opened): the file changed or is damaged; "
-                        "open it again or re-encode it"
-                    )
-                check_size(img, self._size, f"frame {self.start + i} of {self.path}")
+                img = self._decoded(self._reader, i)
             img.flags.writeable = False
             if self._cache_frames:
                 self._cache[i] = img
@@ -273,6 +266,24 @@ class FrameSource:
             return _prefetched(self._iter_frames(start, stop), prefetch)
         return self._iter_frames(start, stop)
 
+    def _decoded(self, reader: _VideoReader, i: int) -> np.ndarray:
+        """Clip frame ``i`` decoded by ``reader``, checked for its size.
+
+        Raises
+        ------
+        GaitInputError
+            The frame no longer decodes (the file changed or is damaged since it was opened).
+        """
+        img = reader.read(self.start + i)
+        if img is None:
+            raise GaitInputError(
+                f"frame {self.start + i} of {self.path} cannot be decoded any more (it "
+                "did when the file was opened): the file changed or is damaged; "
+                "open it again or re-encode it"
+            )
+        check_size(img, self._size, f"frame {self.start + i} of {self.path}")
+        return img
+
     def _iter_frames(self, start: int, stop: int | None) -> Iterator[tuple[int, np.ndarray]]:
         n = len(self)
         stop = n if stop is None else min(int(stop), n)
@@ -284,15 +295,7 @@ class FrameSource:
         reader = _VideoReader(self.path, self._timestamps_ms)
         try:
             for i in range(start, stop):
-                img = reader.read(self.start + i)
-                if img is None:
-                    raise GaitInputError(
-                        f"frame {self.start + i} of {self.path} cannot be decoded any more (it "
-                        "did when the file was opened): the file changed or is damaged; "
-                        "open it again or re-encode it"
-                    )
-                check_size(img, self._size, f"frame {self.start + i} of {self.path}")
-                yield i, img
+                yield i, self._decoded(reader, i)
         finally:
             reader.close()
 

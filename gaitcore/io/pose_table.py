@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from gaitcore.errors import GaitInputError
-from gaitcore.schema import read_text
+from gaitcore.schema import is_number, read_text
 
 if TYPE_CHECKING:
     from gaitcore.rig.skeleton import Skeleton
@@ -116,7 +116,7 @@ def _numbers(row: list[str], header: list[str], where: str) -> np.ndarray:
     try:
         values = np.array([float(cell) for cell in row])
     except ValueError:
-        j, cell = next((j, c) for j, c in enumerate(row) if not _is_number(c))
+        j, cell = next((j, c) for j, c in enumerate(row) if not is_number(c))
         raise GaitInputError(f"{where}, column '{_shown(header[j])}': '{_shown(cell)}' is not "
                              "a number") from None
     if not np.all(np.isfinite(values)):
@@ -130,14 +130,6 @@ def _shown(text: str) -> str:
     """``text`` on one short line, for a message."""
     text = " ".join(text.split())
     return text if len(text) <= 40 else text[:37] + "..."
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
 
 
 def write_pose_table(path: str | Path, table: PoseTable, *, fps: float | None = None) -> None:

@@ -18,7 +18,7 @@ from gaitcore.io.bvh.hierarchy import Node, parse_hierarchy
 from gaitcore.io.pose_table import PoseTable
 from gaitcore.rig.rotations import axis_matrix, continuous_zxy
 from gaitcore.rig.skeleton import Joint, Skeleton
-from gaitcore.schema import MAX_FPS, read_text
+from gaitcore.schema import MAX_FPS, is_number, read_text
 
 _OUR_ROTATION_ORDER = "zxy"
 _SIDE_WORDS = (("Left", "Right"), ("left", "right"), ("LEFT", "RIGHT"))
@@ -142,7 +142,7 @@ def _parse_motion(lines: list[str], motion_line: int, n_columns: int,
         try:
             motion[r] = [float(c) for c in cells]
         except ValueError:
-            bad = next(c for c in cells if not _is_number(c))
+            bad = next(c for c in cells if not is_number(c))
             raise GaitInputError(f"{where}, line {number}: {bad!r} is not a number") from None
         if not np.all(np.isfinite(motion[r])):
             raise GaitInputError(f"{where}, line {number}: NaN or infinite value; every "
@@ -161,14 +161,6 @@ def _frame_rate(frame_time: float, digits: int) -> float:
         if fps > 0 and abs(1.0 / fps - frame_time) <= tolerance * (1 + 1e-9):
             return fps
     return 1.0 / frame_time
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
 
 
 def _build_skeleton(nodes: list[Node], motion: np.ndarray, scale: float, bone_ratio: float,
