@@ -126,7 +126,8 @@ def _run_analyze(args: argparse.Namespace) -> int:
         from gaitcore.io.scribbles import write_segmentation_json
 
         write_segmentation_json(args.out / "segmentation.json",
-                                [states[t] for t in sorted(states)], source=str(args.input))
+                                [states[t] for t in sorted(states)], source=str(args.input),
+                                first_frame=args.start)
     silhouettes = Silhouettes(roi, "masks" if is_mask_folder(args.input) else "segmented")
     analysis = analyze(silhouettes, settings, first_frame=args.start)
     write_analysis_json(args.out / "analysis.json", analysis, source=str(args.input), fps=fps)

@@ -88,12 +88,16 @@ def write_scribbles(path: str | Path, scribbles: Sequence[Scribble]) -> None:
 
 
 def write_segmentation_json(path: str | Path, states: Sequence[FrameState], *,
-                            source: str = "") -> None:
-    """Write ``segmentation.json``: per frame, lost, corrected and confidence."""
+                            source: str = "", first_frame: int = 0) -> None:
+    """Write ``segmentation.json``: per frame, lost, corrected and confidence.
+
+    ``states[i]`` is of source frame ``first_frame + i``; the file numbers frames by source
+    frame, as the masks and the scribbles are.
+    """
     _write_json(Path(path), {
         "format": SEGMENTATION_FORMAT, "version": 1, "source": source,
         "n_frames": len(states),
-        "frames": [{"frame": t, "lost": st.lost, "corrected": st.corrected,
+        "frames": [{"frame": first_frame + t, "lost": st.lost, "corrected": st.corrected,
                     "confidence": st.confidence} for t, st in enumerate(states)],
     })
 

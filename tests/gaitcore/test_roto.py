@@ -179,3 +179,16 @@ def test_a_small_animal_in_a_large_frame_keeps_its_detail():
     seg.run()
     assert seg.work.scale == 1.0
     assert min(iou(seg.mask(t), big_truth[t]) for t in range(len(big))) >= 0.85
+
+
+def test_analyze_from_a_later_frame_numbers_masks_and_states_by_source_frame(tmp_path):
+    frames, truth = scene(30)
+    clip = _write_clip(tmp_path / "clip", frames)
+    b = padded_box(truth[6])
+    out = tmp_path / "out"
+    main(["analyze", str(clip), "--out", str(out), "--start", "6", "--box",
+          f"{b.x},{b.y},{b.w},{b.h}"])
+    masks = sorted((out / "masks").glob("*.png"))
+    assert [p.name for p in masks] == [f"{t:05d}.png" for t in range(6, 30)]
+    data = json.loads((out / "segmentation.json").read_text())
+    assert [f["frame"] for f in data["frames"]] == list(range(6, 30))
