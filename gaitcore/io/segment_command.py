@@ -9,6 +9,7 @@ corrected, confidence).
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from gaitcore.errors import GaitInputError
@@ -55,7 +56,12 @@ def segmentation_options(args: argparse.Namespace) -> dict:
 
     scribbles = [] if args.scribbles is None else read_scribbles(args.scribbles)
     return {"subject": args.subject, "background": args.background, "box": args.box,
-            "scribbles": scribbles, "method": args.method}
+            "scribbles": scribbles, "method": args.method, "note_sink": print_note}
+
+
+def print_note(text: str) -> None:
+    """Tell the user something of the input on stderr (stdout may carry JSON)."""
+    print(f"note: {text}", file=sys.stderr)
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:

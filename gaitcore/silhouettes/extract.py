@@ -60,6 +60,7 @@ def load_silhouettes(
     stop: int | None = None,
     progress: Progress | None = None,
     state_sink: Callable[[int, FrameState], None] | None = None,
+    note_sink: Callable[[str], None] | None = None,
 ) -> RoiClip:
     """Tracked, fixed-size silhouettes of the subject in frames ``start <= f < stop`` of ``source``.
 
@@ -86,6 +87,9 @@ def load_silhouettes(
     progress : callable(done, total) -> bool, optional
     state_sink : callable(frame, FrameState), optional
         Receives what the segmentation says of each frame of colour footage.
+    note_sink : callable(str), optional
+        Receives what the user should know of a video that decodes with a difference (its
+        header's frame count wrong, for example).
 
     Raises
     ------
@@ -121,6 +125,8 @@ def load_silhouettes(
         end = float("inf") if stop is None else stop
         scribbles = [replace(s, frame=s.frame - start) for s in scribbles if start <= s.frame < end]
     with open_frames(source, start=start, stop=stop) as frames:
+        if frames.note and note_sink is not None:
+            note_sink(frames.note)
         return segment_clip(frames, list(subject), list(background), box=box,
                             scribbles=scribbles, method=method, progress=progress,
                             mask_sink=write_mask,

@@ -192,3 +192,20 @@ def test_analyze_from_a_later_frame_numbers_masks_and_states_by_source_frame(tmp
     assert [p.name for p in masks] == [f"{t:05d}.png" for t in range(6, 30)]
     data = json.loads((out / "segmentation.json").read_text())
     assert [f["frame"] for f in data["frames"]] == list(range(6, 30))
+
+
+def test_segment_command_tells_of_a_video_that_decodes_short(tmp_path, capsys):
+    frames, truth = scene(12)
+    rows, cols = frames[0].shape[:2]
+    full = tmp_path / "clip.avi"
+    writer = cv2.VideoWriter(str(full), cv2.VideoWriter_fourcc(*"MJPG"), 25.0, (cols, rows))
+    for f in frames:
+        writer.write(f)
+    writer.release()
+    cut = tmp_path / "cut.avi"
+    cut.write_bytes(full.read_bytes()[: int(full.stat().st_size * 0.8)])
+    b = padded_box(truth[0])
+    assert main(["segment", str(cut), "--out", str(tmp_path / "out"), "--box",
+                 f"{b.x},{b.y},{b.w},{b.h}"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith("note: cut.avi: its header says 12 frames but") and err.count("\n") == 1
