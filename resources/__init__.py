@@ -1,1 +1,1 @@
-"""Data files shipped with gaitcore (installed as ``gaitcore.resources``): skeleton templates."""
+"""Data files shipped with gaitcore (installed as ``gaitcore.resources``): skeleton templates, the gait library of example poses."""
