@@ -68,7 +68,8 @@ def test_a_library_of_other_gaits_folds_the_legs_closer_than_plain_ik(horse, gai
             for name in ("L_fore_toe", "R_fore_toe", "L_hind_toe", "R_hind_toe"):
                 j = horse.joint_index(name)
                 target = [*xyz[j, :2], horse.joint_positions(posed)[j, 2]]
-                posed = drag_end(horse, posed, j, target, library=library if use else None)
+                posed = drag_end(horse, posed, j, target, library=library if use else None,
+                                 min_gain_m_per_deg=0.0)  # to the closest reach
                 # from the template's trunk a galloping hoof may lie a little out of reach
                 assert np.linalg.norm(horse.joint_positions(posed)[j, :2] - xyz[j, :2]) < 0.03
             errors[use].append(angle_error_deg(posed[idx], pose[idx])[legs].mean())
@@ -127,3 +128,22 @@ def test_the_drag_library_adds_the_projects_other_keys_not_the_one_posed(horse):
                                        for c in horse.channel_names]], a)
     assert "1 other key" in library.source
     assert drag_library(Project(), horse, 9) is shipped
+
+
+def test_a_tail_dragged_just_out_of_reach_keeps_its_curve_and_a_reachable_end_is_reached(horse):
+    curved = horse.rest_pose()
+    tail = [horse.channel_index(f"tail{i}.rz") for i in range(1, 5)]
+    curved[tail] = [-20.0, -10.0, -5.0, -5.0]
+    end = horse.joint_index("tail_end")
+    xyz = horse.joint_positions(curved)
+    top = xyz[horse.joint_index("tail1")]
+    out = top + 1.03 * (xyz[end] - top) / np.linalg.norm(xyz[end] - top) * np.linalg.norm(
+        np.diff(horse.joint_positions(horse.rest_pose())[[horse.joint_index(f"tail{i}")
+                                                          for i in range(1, 5)] + [end]],
+                axis=0), axis=1).sum()  # 3% beyond the length of the tail, straight
+    kept = drag_end(horse, curved, end, out)
+    straight = drag_end(horse, curved, end, out, min_gain_m_per_deg=0.0)
+    assert np.abs(kept[tail] - curved[tail]).sum() < 0.5 * np.abs(straight[tail] - curved[tail]).sum()
+    near = xyz[end] + [0.08, 0.05, 0.0]
+    reached = drag_end(horse, curved, end, near)
+    assert np.linalg.norm(horse.joint_positions(reached)[end] - near) < 1e-3
