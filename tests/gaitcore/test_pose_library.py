@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from gaitcore.bench.evaluate import angle_error_deg
-from gaitcore.bench.gait_library import SHIPPED_GAITS, gait_library
+from gaitcore.bench.gait_library import SHIPPED_GAITS, gait_library, write_gait_library
 from gaitcore.bench.gaits import generate_gait
 from gaitcore.errors import GaitInputError
 from gaitcore.project.document import Project
@@ -32,6 +32,15 @@ def test_the_shipped_library_is_the_walk_trot_and_gallop_as_the_builder_writes_t
     assert "canter" not in SHIPPED_GAITS
     assert shipped.channel_names == built.channel_names
     np.testing.assert_allclose(shipped.poses, built.poses, atol=1e-9)
+
+
+def test_the_builder_regenerates_the_shipped_file_exactly(tmp_path):
+    from importlib.resources import files
+
+    written = tmp_path / "horse_gaits.csv"
+    write_gait_library(written)
+    shipped = files("gaitcore.resources") / "poses" / "horse_gaits.csv"
+    assert written.read_text(encoding="utf-8") == shipped.read_text(encoding="utf-8")
 
 
 def test_a_drag_to_where_an_example_puts_the_hoof_takes_that_examples_fold(horse):
