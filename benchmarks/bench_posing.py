@@ -157,7 +157,8 @@ def _canter_section() -> tuple[Section, list[str]]:
              "gaitcore.bench.gait_library); no canter in it", *lines,
              "one point per leg fixes 2 of its 6-7 side-view angles; the library supplies how "
              "the leg folds (the examples whose hoof lies nearest the target, seen from the "
-             "trunk), the least-squares solve then reaches the target from there",
+             "trunk, and the chain as it is), the least-squares solve then reaches the "
+             "target from there",
              "the synthetic gaits share their leg model (flexion synergies of "
              "gaitcore.bench.gaits), so a library of other gaits predicts the canter's leg "
              "folds better than it would a real horse's",

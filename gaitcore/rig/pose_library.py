@@ -143,9 +143,11 @@ def example_start(library: PoseLibrary, skeleton: Skeleton, base_pose: np.ndarra
     Notes
     -----
     The start is the mean of the :data:`NEIGHBOURS` nearest examples weighted by a Gaussian
-    of their end's distance from the target (width :data:`BANDWIDTH_SHARE` of the chain's
-    length); the solve then reaches the target from there (Grochow et al. 2004 constrain IK
-    by a learned model of poses; this is its nearest-examples form).
+    of how much farther than the nearest their end lies from the target (width
+    :data:`BANDWIDTH_SHARE` of the chain's length); the solve then reaches the target from
+    there (Grochow et al. 2004 constrain IK by a learned model of poses; this is its
+    nearest-examples form). The chain's own pose in ``base_pose`` is one of the examples, so
+    a small drag keeps the fold the artist gave it.
     """
     found = _chain_examples(library, skeleton, chain, end)
     if found is None:
@@ -155,7 +157,9 @@ def example_start(library: PoseLibrary, skeleton: Skeleton, base_pose: np.ndarra
     parent = int(skeleton.parents[chain[0]])
     rot, origin = world[parent, :3, :3], world[parent, :3, 3]
     seen = rot.T @ (np.asarray(target_xyz, float) - origin)
-    distance = np.linalg.norm(ends - seen, axis=1)
+    own_end = rot.T @ (world[end, :3, 3] - origin)  # the chain as it is: one more example
+    angles = np.vstack([angles, np.asarray(base_pose, float)[slots]])
+    distance = np.linalg.norm(np.vstack([ends, own_end]) - seen, axis=1)
     near = np.argsort(distance)[:NEIGHBOURS]
     width = BANDWIDTH_SHARE * length
     weight = np.exp(-0.5 * ((distance[near] - distance[near[0]]) / width) ** 2)

@@ -44,7 +44,7 @@ def test_the_builder_regenerates_the_shipped_file_exactly(tmp_path):
 
 
 def test_a_drag_to_where_an_example_puts_the_hoof_takes_that_examples_fold(horse):
-    example = generate_gait(horse, "trot", 30)[7]
+    example = generate_gait(horse, "trot", 30)[15]  # the hoof 65 cm from its rest place
     library = PoseLibrary.of(horse, example[None], "one trot pose")
     end = horse.joint_index("L_hind_toe")
     chain = effector_chain(horse, end)
@@ -156,3 +156,14 @@ def test_a_tail_dragged_just_out_of_reach_keeps_its_curve_and_a_reachable_end_is
     near = xyz[end] + [0.08, 0.05, 0.0]
     reached = drag_end(horse, curved, end, near)
     assert np.linalg.norm(horse.joint_positions(reached)[end] - near) < 1e-3
+
+
+def test_a_small_drag_keeps_the_fold_the_artist_gave_the_leg(horse):
+    posed = generate_gait(horse, "walk", 40)[9]  # as the artist left it
+    end = horse.joint_index("R_fore_toe")
+    leg = _channels(horse, effector_chain(horse, end))
+    nudge = horse.joint_positions(posed)[end] + [0.01, 0.005, 0.0]
+    far_examples = PoseLibrary.of(horse, np.zeros((1, horse.n_channels)), "the rest pose")
+    moved = drag_end(horse, posed, end, nudge, library=far_examples)
+    assert np.abs(moved[leg] - posed[leg]).max() < 3.0
+    assert np.linalg.norm(horse.joint_positions(moved)[end] - nudge) < 1e-3
