@@ -48,14 +48,15 @@ class PoseLibrary:
     channel_names : tuple of str
         ``"<joint>.<channel>"``, k of them.
     poses : ndarray of shape (n, k)
-        Angles in degrees (translations are ignored).
+        Angles in degrees (translations are ignored); NaN where an example lacks a channel
+        (a pose of another rig), and then it is no example for the chains using it.
     source : str
         What the examples are, in words (shown to the artist and in the benchmark's notes).
 
     Raises
     ------
     GaitInputError
-        Poses that are not an (n, k) array of finite numbers matching the channel names.
+        Poses that are not an (n, k) array of numbers (or NaN) matching the channel names.
     """
 
     channel_names: tuple[str, ...]
@@ -67,8 +68,9 @@ class PoseLibrary:
         if poses.ndim != 2 or poses.shape[1] != len(self.channel_names):
             raise GaitInputError(f"a pose library needs one column per channel "
                                  f"({len(self.channel_names)}), got shape {poses.shape}")
-        if not np.all(np.isfinite(poses)):
-            raise GaitInputError("a pose library holds only finite angles")
+        if np.isinf(poses).any():
+            raise GaitInputError("a pose library holds only finite angles (or NaN where a "
+                                 "pose lacks a channel)")
         poses.setflags(write=False)
         object.__setattr__(self, "channel_names", tuple(self.channel_names))
         object.__setattr__(self, "poses", poses)
@@ -91,7 +93,7 @@ class PoseLibrary:
             return self
         names = self.channel_names + tuple(c for c in skeleton.channel_names
                                            if c not in self.channel_names)
-        merged = np.zeros((len(self) + len(added), len(names)))
+        merged = np.full((len(self) + len(added), len(names)), np.nan)
         merged[:len(self), :len(self.channel_names)] = self.poses
         merged[len(self):, [names.index(c) for c in skeleton.channel_names]] = added
         return PoseLibrary(names, merged, f"{self.source}; {source}")
@@ -183,11 +185,12 @@ def _chain_examples(library: PoseLibrary, skeleton: Skeleton, chain: tuple[int, 
                     return None
                 slots.append(skeleton.channel_index(name))
                 columns.append(library.channel_names.index(name))
-    if not slots or not len(library):
+    angles = library.poses[:, columns]
+    angles = angles[~np.isnan(angles).any(axis=1)]  # the examples that have every channel
+    if not slots or not len(angles):
         return None
     slots_a = np.array(slots)
-    angles = library.poses[:, columns]
-    poses = np.zeros((len(library), skeleton.n_channels))
+    poses = np.zeros((len(angles), skeleton.n_channels))
     poses[:, slots_a] = angles
     world = skeleton.forward_kinematics(poses)
     parent = int(skeleton.parents[chain[0]])

@@ -11,7 +11,7 @@ from gaitcore.bench.gaits import generate_gait
 from gaitcore.errors import GaitInputError
 from gaitcore.project.document import Project
 from gaitcore.project.steps import drag_library
-from gaitcore.rig.pose_library import PoseLibrary, shipped_library
+from gaitcore.rig.pose_library import PoseLibrary, _chain_examples, shipped_library
 from gaitcore.rig.posing import drag_end, effector_chain
 from gaitcore.rig.proportions import RigProportions, proportioned
 from gaitcore.rig.templates import load_template
@@ -123,7 +123,7 @@ def test_bad_libraries_are_refused():
     with pytest.raises(GaitInputError, match="one column per channel"):
         PoseLibrary(("a.rz", "b.rz"), np.zeros((3, 1)), "x")
     with pytest.raises(GaitInputError, match="finite"):
-        PoseLibrary(("a.rz",), np.array([[np.nan]]), "x")
+        PoseLibrary(("a.rz",), np.array([[np.inf]]), "x")
 
 
 def test_the_drag_library_adds_the_projects_other_keys_not_the_one_posed(horse):
@@ -137,6 +137,21 @@ def test_the_drag_library_adds_the_projects_other_keys_not_the_one_posed(horse):
                                        for c in horse.channel_names]], a)
     assert "1 other key" in library.source
     assert drag_library(Project(), horse, 9) is shipped
+
+
+def test_examples_of_another_rig_are_no_examples_for_its_chains(horse):
+    bird = PoseLibrary(("wing.rz",), np.array([[10.0]]), "a bird")
+    example = generate_gait(horse, "gallop", 24)[5]
+    library = bird.with_poses(horse, example[None], "one gallop pose")
+    assert np.isnan(library.poses[0, 1:]).all() and np.isnan(library.poses[1, 0])
+    end = horse.joint_index("L_fore_toe")
+    leg = _channels(horse, effector_chain(horse, end))
+    start = example.copy()
+    start[leg] = 0.0
+    posed = drag_end(horse, start, end, horse.joint_positions(example)[end], library=library)
+    np.testing.assert_allclose(posed[leg], example[leg], atol=1e-6)
+    _, angles, _, _ = _chain_examples(library, horse, effector_chain(horse, end), end)
+    assert len(angles) == 1  # the bird's row is no example of a horse's leg
 
 
 def test_a_tail_dragged_just_out_of_reach_keeps_its_curve_and_a_reachable_end_is_reached(horse):
