@@ -170,7 +170,8 @@ def _canter_section() -> tuple[Section, list[str]]:
              "largest miss shown",
              "tried and left out: a fit of the trunk's pitch to the key's silhouette (Powell "
              "over root and spine pitch, size and place; ends dragged again after) reached "
-             "4.03 deg from 4.50 at 2 to 4 s per key"]
+             "4.03 deg from the 4.50 of the library's drags to the closest reach, at 2 to 4 s "
+             "per key (a prototype, not in the product)"]
     return Section("Posing a key by dragging its ends (angles about Z, degrees)",
                    ["posing", "mean error (deg)", "drags per key", *parts, "largest miss (mm)",
                     "ms per drag"], rows, notes), lines
