@@ -247,6 +247,13 @@ class MainWindow(QMainWindow):
         self._action(pose, "M&irror left/right", "Ctrl+M", posing.mirror)
         self._action(pose, "Pose alternate as mirror of its &key", None, posing.mirror_of_key)
         self._action(pose, "&Reset pose", None, lambda: posing.reset(joint_only=False))
+        self.library_action = pose.addAction("Drags fold legs, neck and tail as the &gait library")
+        self.library_action.setCheckable(True)
+        self.library_action.setChecked(posing.drags_use_library)
+        self.library_action.setToolTip("A dragged hoof, head or tail tip starts its chain from the "
+                                       "example poses nearest the target (the shipped gait "
+                                       "library and the other keys), then IK reaches it")
+        self.library_action.toggled.connect(posing.set_drags_use_library)
         pose.addSeparator()
         self._action(pose, "Import pose from &CSV...", None, posing.import_csv)
         self._action(pose, "Import pose from &BVH frame...", None, posing.import_bvh)

@@ -32,8 +32,15 @@ from gaitcore.errors import GaitInputError
 from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.pose_table import PoseTable, joints_of, map_channels, read_pose_table
 from gaitcore.project.footage_fit import RigFit, fit_rig
-from gaitcore.project.steps import alternates_in_use, frames_to_pose, missing_poses, read_rig
+from gaitcore.project.steps import (
+    alternates_in_use,
+    drag_library,
+    frames_to_pose,
+    missing_poses,
+    read_rig,
+)
 from gaitcore.rig.orient import reoriented
+from gaitcore.rig.pose_library import PoseLibrary
 from gaitcore.rig.posing import drag_end, effector_chain_top, turn_joint
 from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
@@ -59,6 +66,9 @@ class PosingController(QObject):
         self._clipboard: np.ndarray | None = None
         self._drags = count()
         self._drag_id = 0
+        self._drag_library: PoseLibrary | None = None
+        self.drags_use_library = True
+        """Whether an end drag folds its chain as the examples of :meth:`drag_library` do."""
 
     # -- queries -----------------------------------------------------------------------------
     def frames(self) -> tuple[int, ...]:
@@ -99,9 +109,19 @@ class PosingController(QObject):
         joint = channel.rsplit(".", 1)[0]
         self._push(frame, pose, f"pose {joint} on frame {frame}", ("spin", frame, joint))
 
+    def set_drags_use_library(self, on: bool) -> None:
+        """Let end drags fold their chain as the library's examples do (or plain IK)."""
+        self.drags_use_library = bool(on)
+
     def begin_drag(self) -> None:
-        """Start a new viewport drag: its changes merge into one undo step."""
+        """Start a new viewport drag: its changes merge into one undo step; an end drag
+        folds its chain as the examples of the gait library and the other keys do (unless
+        :attr:`drags_use_library` is off)."""
         self._drag_id = next(self._drags)
+        self._drag_library = None
+        frame = self.editable_frame()
+        if self.drags_use_library and frame is not None:
+            self._drag_library = drag_library(self._state.project, self._state.skeleton, frame)
 
     def rotate_joint(self, joint: int, base_pose: np.ndarray, axis: np.ndarray, angle_deg: float) -> None:
         """Set the current key's pose to ``base_pose`` with ``joint`` turned about world ``axis``.
@@ -123,10 +143,11 @@ class PosingController(QObject):
 
     def drag_end(self, joint: int, base_pose: np.ndarray, target_xyz: np.ndarray) -> None:
         """Set the current key's pose to ``base_pose`` with end ``joint`` moved to ``target_xyz``
-        by IK on the chain above it (leg, neck or tail), within the joint limits."""
+        by IK on the chain above it (leg, neck or tail), within the joint limits, folded as the
+        examples of the drag's library (see :meth:`begin_drag`)."""
         frame = self._require_frame()
         skeleton = self._state.skeleton
-        pose = drag_end(skeleton, base_pose, joint, target_xyz)
+        pose = drag_end(skeleton, base_pose, joint, target_xyz, library=self._drag_library)
         if frame is None or pose is None:
             return
         name = skeleton.joints[joint].name

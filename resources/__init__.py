@@ -1,1 +1,2 @@
-"""Data files shipped with gaitcore (installed as ``gaitcore.resources``): skeleton templates."""
+"""Data files shipped with gaitcore (installed as ``gaitcore.resources``): skeleton templates
+and the gait library of example poses."""

@@ -55,11 +55,14 @@ def test_the_wheel_holds_the_package_and_its_resources(installed):
     out = _run(["python", "-c", "import gaitcore, app; from importlib.resources import files; "
                 "print(gaitcore.__file__); print(app.__file__); "
                 "print((files('gaitcore.resources') / 'skeletons' / 'horse.json').is_file()); "
-                "print((files('gaitcore') / 'py.typed').is_file())"], cwd=base, env=env)
-    gaitcore_file, app_file, has_template, typed = out.stdout.split()
+                "print((files('gaitcore') / 'py.typed').is_file()); "
+                "from gaitcore.rig.pose_library import shipped_library; "
+                "print(len(shipped_library()))"], cwd=base, env=env)
+    gaitcore_file, app_file, has_template, typed, examples = out.stdout.split()
     assert Path(gaitcore_file).is_relative_to(base / "venv"), "gaitcore must come from the wheel"
     assert Path(app_file).is_relative_to(base / "venv"), "the app must come from the wheel"
     assert has_template == "True" and typed == "True"
+    assert int(examples) > 0  # the gait library of example poses (resources/poses)
 
 
 def test_the_installed_commands_synthesize_analyse_and_show_the_demo(installed):

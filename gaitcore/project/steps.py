@@ -29,6 +29,7 @@ from gaitcore.io.motion import ExportMotion, export_motion
 from gaitcore.progress import Progress
 from gaitcore.project.document import AnimationOptions, Project, Silhouettes
 from gaitcore.rig.orient import guess_axes, reoriented
+from gaitcore.rig.pose_library import PoseLibrary, shipped_library
 from gaitcore.rig.skeleton import Skeleton
 from gaitcore.silhouettes.annotations import Rect
 from gaitcore.silhouettes.segmentation import segment_clip
@@ -37,7 +38,7 @@ from gaitcore.silhouettes.tracking import WORK_SIDE_PX, crop_rois
 
 __all__ = [
     "Animation", "CLAMP_RANGE", "CENTIMETRE_RIG_M", "alternates_in_use", "analyze",
-    "animate_project", "frame_rate", "frames_to_pose", "missing_poses", "open_source",
+    "animate_project", "drag_library", "frame_rate", "frames_to_pose", "missing_poses", "open_source",
     "read_rig", "rekey", "segment", "silhouettes_from_masks", "sketched_silhouettes",
     "swap_warning_for",
 ]
@@ -196,6 +197,26 @@ def missing_poses(project: Project, analysis: Analysis | None, n_channels: int) 
     return tuple(f for f in frames_to_pose(project, analysis)
                  if len(project.key_poses.get(f, ())) != n_channels)
 
+
+def drag_library(project: Project, skeleton: Skeleton, frame: int) -> PoseLibrary:
+    """The examples an end drag on ``frame`` folds its chain like: the shipped gait library
+    and the poses of the project's other keys (only chains whose channels they name use
+    them; a rig of other names gets no example and drags as plain IK).
+
+    Parameters
+    ----------
+    project : Project
+    skeleton : Skeleton
+        The rig being posed.
+    frame : int
+        The key being posed (its own stored pose is left out).
+    """
+    others = [p for f, p in sorted(project.key_poses.items())
+              if f != frame and len(p) == skeleton.n_channels]
+    library = shipped_library()
+    if not others:
+        return library
+    return library.with_poses(skeleton, np.array(others), f"{len(others)} other key(s) posed")
 
 # -- animation -------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)

@@ -204,8 +204,8 @@ def _leg(skeleton: Skeleton, end_joint: str, upper_joint: str | None, knee_joint
 
 def solve_chain(skeleton: Skeleton, pose: np.ndarray, end_joint: str, target_xyz: np.ndarray,
                 *, root_joint: str, foot_joint: str | None = None, iterations: int = 30,
-                damping: float = DEFAULT_DAMPING,
-                tolerance_m: float = DEFAULT_TOLERANCE_M) -> IKResult:
+                damping: float = DEFAULT_DAMPING, tolerance_m: float = DEFAULT_TOLERANCE_M,
+                min_gain_m_per_deg: float = 0.0) -> IKResult:
     """Move a chain (neck, tail, a whole leg) so that ``end_joint`` reaches ``target_xyz``.
 
     Damped least squares: each step changes every rotation channel of the chain by the
@@ -230,6 +230,12 @@ def solve_chain(skeleton: Skeleton, pose: np.ndarray, end_joint: str, target_xyz
     damping : float
         Metres; larger is steadier near unreachable targets and slower to converge.
     tolerance_m : float
+    min_gain_m_per_deg : float
+        The least a degree of change (the norm of the chain's angle changes) must bring the
+        end closer for the solve to take it: near a target just out of the reach of the
+        chain's shape, the last centimetres would straighten it (a tail, a neck) for little
+        gain; the solve keeps the pose with the least ``miss + min_gain * change``. 0 follows
+        the target to the closest pose.
 
     Returns
     -------
@@ -254,15 +260,17 @@ def solve_chain(skeleton: Skeleton, pose: np.ndarray, end_joint: str, target_xyz
     chain = _Chain(skeleton, pose)
     movers = [j for j in path[1:] if (chain.slots[j] >= 0).any() and j != foot]
     best = _descend(chain, movers, end, foot, target, iterations=iterations, damping=damping,
-                    tolerance_m=tolerance_m)
+                    tolerance_m=tolerance_m, min_gain=min_gain_m_per_deg)
     return _result(_Chain(skeleton, best), end, target, tolerance_m)
 
 
 def _descend(chain: _Chain, movers: list[int], end: int, foot: int | None,
-             target: np.ndarray, *, iterations: int, damping: float,
-             tolerance_m: float) -> np.ndarray:
-    """Damped least-squares steps on ``chain``; the pose that came closest to the target."""
+             target: np.ndarray, *, iterations: int, damping: float, tolerance_m: float,
+             min_gain: float = 0.0) -> np.ndarray:
+    """Damped least-squares steps on ``chain``; the pose of least ``miss + min_gain *
+    change`` (degrees from the start), the closest to the target when ``min_gain`` is 0."""
     foot_rotation = None if foot is None else chain.world[foot, :3, :3].copy()
+    start = chain.pose.copy()
     best = (np.linalg.norm(chain.position(end) - target), chain.pose.copy())
     for _ in range(max(1, iterations)):
         effector, aim = _effector(chain, end, foot, foot_rotation, target)
@@ -276,9 +284,10 @@ def _descend(chain: _Chain, movers: list[int], end: int, foot: int | None,
         chain.add_angles(slots, step)
         if foot is not None:
             chain.set_world_rotation(foot, foot_rotation)
-        miss = np.linalg.norm(chain.position(end) - target)
-        if miss < best[0]:
-            best = (miss, chain.pose.copy())
+        cost = (np.linalg.norm(chain.position(end) - target)
+                + min_gain * np.linalg.norm(chain.pose - start))
+        if cost < best[0]:
+            best = (cost, chain.pose.copy())
     return best[1]
 
 

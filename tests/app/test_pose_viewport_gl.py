@@ -158,7 +158,10 @@ def test_hovering_highlights_and_names_the_joint(qtbot, window, posed_key):
     assert viewport.hover.text() == ""
 
 
-def test_drag_a_hoof_moves_the_leg_by_ik_in_one_undo_step(qtbot, window, posed_key):
+def test_drag_a_hoof_moves_the_leg_by_ik_in_one_undo_step(qtbot, window, posed_key, artifacts_dir):
+    from gaitcore.project.steps import drag_library
+    from gaitcore.rig.posing import drag_end
+
     view, state = window.viewport.gl_view, window.state
     skeleton = state.skeleton
     qtbot.wait(50)
@@ -182,6 +185,11 @@ def test_drag_a_hoof_moves_the_leg_by_ik_in_one_undo_step(qtbot, window, posed_k
     changed = {c.rsplit(".", 1)[0] for c, a, b in zip(skeleton.channel_names, after, before)
                if abs(a - b) > 1e-6}
     assert changed and all(j.startswith(name[:2]) for j in changed)  # that leg only
+    view.render_image().save(str(artifacts_dir / "app_drag_hoof_gait_library.png"))
+    reached = skeleton.joint_positions(after)[end]  # the drag folded the leg as the library
+    library = drag_library(state.project, skeleton, posed_key)
+    np.testing.assert_allclose(after, drag_end(skeleton, before, end, reached, library=library),
+                               atol=0.5)
     limits = skeleton.limits_array()
     assert np.all((after >= limits[:, 0] - 1e-9) & (after <= limits[:, 1] + 1e-9))
     state.undo_stack.undo()
