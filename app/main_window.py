@@ -198,6 +198,11 @@ class MainWindow(QMainWindow):
             suffix: self._action(export, f"{label}...", None, lambda s=suffix: self.exporter.export(s))
             for suffix, label in KINDS.items()
         }
+        export.addSeparator()
+        roto = self.tools.roto
+        self._action(export, "Masks and segmentation.json...", None, roto.export_masks)
+        self._action(export, "Scribbles (brush strokes)...", None, roto.export_scribbles)
+        self._action(file, "&Import scribbles...", None, roto.import_scribbles)
         file.addSeparator()
         self._action(file, "&Quit", QKeySequence.StandardKey.Quit, self.close)
 

@@ -243,6 +243,37 @@ def corrected(session: RotoSession | None, source: FrameSource, project: Project
     return RotoSession.start(source, project.with_scribbles(tuple(scribbles)), progress)
 
 
+def preview_first_frame(source: FrameSource, project: Project,
+                        progress: Progress | None = None) -> np.ndarray:
+    """The first frame's cut-out from the project's box (or rectangles) and the brush
+    strokes of frame 0, as the whole clip's segmentation will cut it, before it runs.
+
+    Only the first frames the first cut looks at are read (it compares frame 0 with a few
+    later ones to see what moves).
+
+    Returns
+    -------
+    ndarray of shape (rows, cols), bool
+
+    Raises
+    ------
+    GaitInputError
+        Nothing to start from, or bad input.
+    """
+    check_segmentation_input(project)
+    settings = SegmentationSettings().propagation
+    n = min(len(source), 1 + max((*settings.motion_offsets, 0)))
+    frames = [source.frame(t) for t in range(n)]
+    report(progress, 1, 2, "first-frame cut-out cancelled")
+    rects = ((), ()) if project.box else (project.subject_rects, project.background_rects)
+    engine = RotoSegmentation(frames, box=project.box, subject_rects=rects[0],
+                              background_rects=rects[1], scribbles=project.scribbles_on(0),
+                              settings=settings)
+    engine.run()
+    report(progress, 2, 2, "first-frame cut-out cancelled")
+    return engine.mask(0)
+
+
 def export_masks(session: RotoSession, out_dir: Path, *, source_name: str = "",
                  progress: Progress | None = None) -> int:
     """Write ``out_dir/masks/00000.png``... (full frame, 0/255, one per source frame) and

@@ -1,0 +1,159 @@
+"""Brush corrections on any frame, re-propagated as one undo step; scribbles and masks files."""
+
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from app.widgets.frame_canvas import Tool
+from tests.app.conftest import wait_ready
+from tests.app.test_main_window import choose_tool, drag
+
+BOX_DRAG = [(1, 36), (150, 120), (296, 220)]
+"""The canter's box on frame 0: its reference mask's bounding box padded 4% (as the scripted
+user of the segmentation bench draws it)."""
+HEAD_30 = [(240, 50), (262, 70), (282, 90)]
+"""Along the horse's head on frame 30."""
+HEAD_60 = [(232, 52), (250, 62), (268, 72), (284, 84)]
+"""Along the horse's head on frame 60."""
+
+
+def _segment_from_box(qtbot, window, canter_clip):
+    window.open_path(canter_clip / "images")
+    wait_ready(qtbot, window)
+    choose_tool(window, Tool.BOX)
+    drag(qtbot, window, BOX_DRAG)
+    qtbot.waitUntil(lambda: window.frame_view._preview is not None, timeout=20_000)
+    job = window.tools.segment()
+    with qtbot.waitSignal(job.succeeded, timeout=60_000):
+        pass
+    wait_ready(qtbot, window)
+    return window.state.project
+
+
+def _paint(qtbot, window, tool, frame, points):
+    window.state.set_frame(frame)
+    qtbot.waitUntil(lambda: window.frame_view.shown_frame == frame)
+    choose_tool(window, tool)
+    drag(qtbot, window, points)
+    qtbot.waitUntil(lambda: not window.tools.roto.busy, timeout=60_000)
+    wait_ready(qtbot, window)
+
+
+def _same_outside(a, b, first, stop):
+    """Silhouettes ``a`` and ``b`` agree on every frame outside ``first <= t < stop``."""
+    outside = np.r_[0:first, stop:a.n_frames]
+    assert np.array_equal(a.roi.lost[outside], b.roi.lost[outside])
+    assert np.array_equal(a.roi.centers_xy[outside], b.roi.centers_xy[outside], equal_nan=True)
+    if a.roi.crops.shape == b.roi.crops.shape and a.roi.scale == b.roi.scale:  # same window
+        assert np.array_equal(a.roi.crops[outside], b.roi.crops[outside])
+
+
+def test_a_brush_correction_repropagates_as_one_undo_step(qtbot, window, canter_clip,
+                                                         artifacts_dir):
+    segmented = _segment_from_box(qtbot, window, canter_clip)
+    stack = window.state.undo_stack
+    steps = stack.count()
+    # "The head is not the subject" on frame 30 (the mask loses it there and after), then
+    # "it is" on frame 60: the second changes only the frames between the key frames around
+    # it (30 and the end of the clip).
+    _paint(qtbot, window, Tool.BACKGROUND_BRUSH, 30, HEAD_30)
+    first_fix = window.state.project
+    assert first_fix.corrected_frames() == (30,) and stack.count() == steps + 1
+    assert first_fix.silhouettes.roi.crops[30].sum() < segmented.silhouettes.roi.crops[30].sum()
+    _paint(qtbot, window, Tool.SUBJECT_BRUSH, 60, HEAD_60)
+    second_fix = window.state.project
+    assert [sc.label for sc in second_fix.scribbles] == ["background", "subject"]
+    assert stack.count() == steps + 2 and stack.undoText() == "paint subject stroke"
+    first, stop = window.tools.roto._session.changed
+    assert 30 < first <= 60 < stop
+    _same_outside(first_fix.silhouettes, second_fix.silhouettes, first, stop)
+    assert not np.array_equal(first_fix.silhouettes.roi.crops[60],
+                              second_fix.silhouettes.roi.crops[60])
+    window.state.set_frame(60)
+    wait_ready(qtbot, window)
+    window.grab().save(str(artifacts_dir / "app_brush_correction.png"))
+    window.timeline.grab().save(str(artifacts_dir / "app_timeline_corrected.png"))
+
+    stack.undo()  # strokes and silhouettes together, exactly
+    assert window.state.project == first_fix
+    stack.redo()
+    assert window.state.project == second_fix
+    stack.undo()
+    stack.undo()
+    assert window.state.project.scribbles == () and window.state.project == segmented
+    # A correction after the undo starts from the segmentation without the undone strokes.
+    _paint(qtbot, window, Tool.BACKGROUND_BRUSH, 60, HEAD_60)
+    again = window.state.project
+    assert again.corrected_frames() == (60,)
+    _same_outside(segmented.silhouettes, again.silhouettes, *window.tools.roto._session.changed)
+
+
+def test_strokes_before_segmenting_refine_the_first_frame_and_are_used(qtbot, window,
+                                                                        canter_clip):
+    window.open_path(canter_clip / "images")
+    wait_ready(qtbot, window)
+    choose_tool(window, Tool.BOX)
+    drag(qtbot, window, BOX_DRAG)
+    qtbot.waitUntil(lambda: window.frame_view._preview is not None, timeout=20_000)
+    wait_ready(qtbot, window)
+    cut = window.frame_view._preview.copy()
+    assert cut.shape == (240, 320) and 0.05 < cut.mean() < 0.6
+    _paint(qtbot, window, Tool.BACKGROUND_BRUSH, 0, [(60, 110), (160, 110), (260, 110)])
+    qtbot.waitUntil(lambda: not np.array_equal(window.frame_view._preview, cut), timeout=20_000)
+    assert window.frame_view._preview.sum() < cut.sum()
+    assert window.state.project.silhouettes is None and window.state.undo_stack.count() == 2
+    job = window.tools.segment()
+    with qtbot.waitSignal(job.succeeded, timeout=60_000):
+        pass
+    assert window.tools.roto._session.states()[0].corrected
+
+
+def test_scribbles_and_masks_round_trip(qtbot, window, canter_clip, asker, tmp_path):
+    _segment_from_box(qtbot, window, canter_clip)
+    _paint(qtbot, window, Tool.BACKGROUND_BRUSH, 30, HEAD_30)
+    painted = window.state.project
+    path = tmp_path / "strokes.json"
+    assert window.tools.roto.export_scribbles(path)
+    asker.next_export_path = tmp_path / "out"
+    job = window.tools.roto.export_masks()
+    with qtbot.waitSignal(job.succeeded, timeout=60_000):
+        pass
+    masks = sorted((tmp_path / "out" / "masks").glob("*.png"))
+    assert len(masks) == 100
+    mask = cv2.imread(str(masks[30]), cv2.IMREAD_UNCHANGED)
+    assert mask.shape == (240, 320) and set(np.unique(mask)) == {0, 255}
+    states = json.loads((tmp_path / "out" / "segmentation.json").read_text())["frames"]
+    assert [s["frame"] for s in states if s["corrected"]] == [30]
+
+    window.state.undo_stack.undo()
+    assert window.state.project.scribbles == ()
+    job = window.tools.roto.import_scribbles(path)  # one undo step, re-propagated
+    with qtbot.waitSignal(job.succeeded, timeout=60_000):
+        pass
+    qtbot.waitUntil(lambda: not window.tools.roto.busy)
+    assert window.state.project.scribbles == painted.scribbles
+    assert window.state.project.silhouettes == painted.silhouettes
+    assert window.state.undo_stack.undoText() == "import background stroke"
+
+
+@pytest.mark.parametrize("content", [
+    "{not json",
+    '{"scribbles": [{"frame": 3, "label": "sky", "width": 8, "points": [[1, 2]]}]}',
+    '{"scribbles": [{"frame": 500, "label": "subject", "width": 8, "points": [[1, 2]]}]}',
+    '{"scribbles": [{"frame": 3, "label": "subject", "width": 8, "points": [[900, 900]]}]}',
+])
+def test_a_bad_scribbles_file_says_why_and_changes_nothing(qtbot, window, canter_clip, asker,
+                                                         tmp_path, content):
+    window.open_path(canter_clip / "images")
+    wait_ready(qtbot, window)
+    before = window.state.project
+    path = tmp_path / "bad.json"
+    path.write_text(content)
+    assert window.tools.roto.import_scribbles(path) is None
+    assert len(asker.errors) == 1 and "nothing was imported" in asker.errors[0]
+    assert "\n" not in asker.errors[0] and "Traceback" not in asker.errors[0]
+    assert window.state.project is before and window.state.undo_stack.count() == 0
