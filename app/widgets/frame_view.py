@@ -190,9 +190,10 @@ class FrameView(QWidget):
         if frame < 0:
             return
         self._draw_silhouette(frame)
-        box = () if project.box is None else (project.box,)
-        for rects, colour in ((box, BOX_COLOUR), (project.subject_rects, SUBJECT_COLOUR),
-                              (project.background_rects, BACKGROUND_COLOUR)):
+        box = () if project.box is None or frame != 0 else (project.box,)
+        rects_0 = (project.subject_rects, project.background_rects) if frame == 0 else ((), ())
+        for rects, colour in ((box, BOX_COLOUR), (rects_0[0], SUBJECT_COLOUR),
+                              (rects_0[1], BACKGROUND_COLOUR)):  # first-frame annotations
             for r in rects:
                 self._add_overlay(_rect_item(QRectF(r.x, r.y, r.w, r.h), colour), 3)
         if self.show_onion and frame > 0:

@@ -157,3 +157,38 @@ def test_a_bad_scribbles_file_says_why_and_changes_nothing(qtbot, window, canter
     assert len(asker.errors) == 1 and "nothing was imported" in asker.errors[0]
     assert "\n" not in asker.errors[0] and "Traceback" not in asker.errors[0]
     assert window.state.project is before and window.state.undo_stack.count() == 0
+
+
+def test_real_footage_box_and_a_correction_keep_the_legs(qtbot, window, shared_data,
+                                                         artifacts_dir):
+    """Muybridge's race horse (15 photographs, 960x540) from the issue's box; on frame 7 a
+    background stroke along the ground the mask took re-propagates; the screenshot shows the
+    overlay."""
+    frames = shared_data / "muybridge-race-horse" / "frames"
+    window.open_path(frames)
+    wait_ready(qtbot, window, timeout_ms=60_000)
+    choose_tool(window, Tool.BOX)
+    drag(qtbot, window, [(110, 30), (500, 250), (870, 450)])
+    job = window.tools.segment()
+    with qtbot.waitSignal(job.succeeded, timeout=120_000):
+        pass
+    wait_ready(qtbot, window, timeout_ms=60_000)
+    sil = window.state.project.silhouettes
+    assert not sil.roi.lost.any()
+    # The legs: the lower third of each silhouette's window is not empty.
+    rows = sil.roi.crops.shape[1]
+    lower = sil.roi.crops[:, 2 * rows // 3 :, :].sum(axis=(1, 2))
+    assert (lower > 0.02 * sil.roi.crops[:, :2 * rows // 3, :].sum(axis=(1, 2))).all(), lower
+    before = window.state.project.silhouettes
+    window.tools.pen.setValue(14)
+    _paint(qtbot, window, Tool.BACKGROUND_BRUSH, 7, [(10, 528), (250, 528), (480, 528)])
+    after = window.state.project.silhouettes
+    assert window.state.project.corrected_frames() == (7,)
+    assert after.roi.crops[7].sum() <= before.roi.crops[7].sum()
+    for name, dock in window.docks.items():  # the footage large: the docks of posing away
+        if name != "timeline":
+            dock.close()
+    window.viewport.hide()
+    qtbot.wait(200)
+    wait_ready(qtbot, window)
+    window.grab().save(str(artifacts_dir / "app_real_footage_legs.png"))
