@@ -58,8 +58,14 @@ class RotoController(QObject):
 
     @property
     def busy(self) -> bool:
-        """A segmentation or a correction is running."""
+        """A segmentation, a correction or a masks export is running (they share the
+        engine: one at a time)."""
         return self._running is not None
+
+    @property
+    def session(self) -> RotoSession | None:
+        """The engine of the last segmentation or correction (None before one)."""
+        return self._session
 
     def _forget(self, *_opened) -> None:
         self._session, self._pending, self._preview_key = None, [], None
@@ -199,7 +205,7 @@ class RotoController(QObject):
         if self._running is not None:
             self._documents.messageRaised.emit("wait for the segmentation to finish, then "
                                                "export the masks")
-            return None
+            return None  # the job running uses the engine
         if folder is None:
             base = state.path or project.footage
             folder = self._documents.asker.export_folder(
@@ -214,6 +220,8 @@ class RotoController(QObject):
             return export_masks(use, folder, source_name=name, progress=progress)
 
         job = Job(work, title)
+        self._running, self._landed = job, True  # strokes painted meanwhile go next
+        job.finished.connect(self._finished)
         return self._documents.run(job, lambda n: self._documents.messageRaised.emit(
             f"exported {n} masks and segmentation.json to {folder}"), tied=False)
 

@@ -150,6 +150,11 @@ class FrameView(QWidget):
         self._preview = mask
         self._draw_overlays()
 
+    @property
+    def preview(self) -> np.ndarray | None:
+        """The first frame's cut-out shown before the clip is segmented (None: none)."""
+        return self._preview
+
     def image_item(self) -> pg.ImageItem:
         """The footage image item (for tests and benchmarks)."""
         return self._image

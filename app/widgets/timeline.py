@@ -212,9 +212,9 @@ class TimelineWidget(QWidget):
             x = self.x_of(f)
             p.fillRect(QRectF(x - max(width, 3.0) / 2, track.top(), max(width, 3.0), track.height()),
                        CORRECTED_COLOUR)
-            y = track.bottom() + 4
-            p.drawPolygon(QPolygonF([QPointF(x, y - 4), QPointF(x + 4, y), QPointF(x, y + 4),
-                                     QPointF(x - 4, y)]))
+            y = track.bottom() + 4  # above the row of steady-gait bars
+            p.drawPolygon(QPolygonF([QPointF(x, y - 4), QPointF(x + 3.5, y),
+                                     QPointF(x, y + 3.5), QPointF(x - 3.5, y)]))
 
     def _paint_trim(self, p: QPainter, track: QRectF, n: int) -> None:
         start, stop = self.trim_range()

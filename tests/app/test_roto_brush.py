@@ -9,12 +9,17 @@ import numpy as np
 import pytest
 
 from app.widgets.frame_canvas import Tool
+from app.widgets.timeline import CORRECTED_COLOUR
+from gaitcore.project.roto_session import RotoSession
+from gaitcore.silhouettes.annotations import Scribble
 from tests.app.conftest import wait_ready
 from tests.app.test_main_window import choose_tool, drag
 
 BOX_DRAG = [(1, 36), (150, 120), (296, 220)]
 """The canter's box on frame 0: its reference mask's bounding box padded 4% (as the scripted
 user of the segmentation bench draws it)."""
+HEAD_0 = [(242, 48), (262, 72), (284, 96)]
+"""Along the horse's head on frame 0."""
 HEAD_30 = [(240, 50), (262, 70), (282, 90)]
 """Along the horse's head on frame 30."""
 HEAD_60 = [(232, 52), (250, 62), (268, 72), (284, 84)]
@@ -26,7 +31,7 @@ def _segment_from_box(qtbot, window, canter_clip):
     wait_ready(qtbot, window)
     choose_tool(window, Tool.BOX)
     drag(qtbot, window, BOX_DRAG)
-    qtbot.waitUntil(lambda: window.frame_view._preview is not None, timeout=20_000)
+    qtbot.waitUntil(lambda: window.frame_view.preview is not None, timeout=20_000)
     job = window.tools.segment()
     with qtbot.waitSignal(job.succeeded, timeout=60_000):
         pass
@@ -68,7 +73,7 @@ def test_a_brush_correction_repropagates_as_one_undo_step(qtbot, window, canter_
     second_fix = window.state.project
     assert [sc.label for sc in second_fix.scribbles] == ["background", "subject"]
     assert stack.count() == steps + 2 and stack.undoText() == "paint subject stroke"
-    first, stop = window.tools.roto._session.changed
+    first, stop = window.tools.roto.session.changed
     assert 30 < first <= 60 < stop
     _same_outside(first_fix.silhouettes, second_fix.silhouettes, first, stop)
     assert not np.array_equal(first_fix.silhouettes.roi.crops[60],
@@ -76,7 +81,13 @@ def test_a_brush_correction_repropagates_as_one_undo_step(qtbot, window, canter_
     window.state.set_frame(60)
     wait_ready(qtbot, window)
     window.grab().save(str(artifacts_dir / "app_brush_correction.png"))
-    window.timeline.grab().save(str(artifacts_dir / "app_timeline_corrected.png"))
+    shot = window.timeline.grab().toImage()
+    shot.save(str(artifacts_dir / "app_timeline_corrected.png"))
+    track = window.timeline._track()
+    for frame, corrected in ((30, True), (45, False), (60, True)):
+        x = round(window.timeline.x_of(frame) + (2 if frame == 60 else 0))  # beside the cursor
+        colour = shot.pixelColor(x, round(track.center().y())).name()
+        assert (colour == CORRECTED_COLOUR.name()) == corrected, (frame, colour)
 
     stack.undo()  # strokes and silhouettes together, exactly
     assert window.state.project == first_fix
@@ -89,27 +100,50 @@ def test_a_brush_correction_repropagates_as_one_undo_step(qtbot, window, canter_
     _paint(qtbot, window, Tool.BACKGROUND_BRUSH, 60, HEAD_60)
     again = window.state.project
     assert again.corrected_frames() == (60,)
-    _same_outside(segmented.silhouettes, again.silhouettes, *window.tools.roto._session.changed)
+    _same_outside(segmented.silhouettes, again.silhouettes, *window.tools.roto.session.changed)
+
+
+def test_a_cancelled_correction_changes_nothing_and_the_next_one_is_right(qtbot, window,
+                                                                          canter_clip):
+    segmented = _segment_from_box(qtbot, window, canter_clip)
+    window.state.set_frame(60)
+    job = window.tools.roto.paint(Scribble(HEAD_60, 8, 60, "background"))
+    job.progressed.connect(lambda done, total: job.cancel())
+    with qtbot.waitSignal(job.cancelled, timeout=60_000):
+        pass
+    qtbot.waitUntil(lambda: not window.tools.roto.busy)
+    assert window.state.project == segmented and window.state.undo_stack.count() == 2
+    stroke = Scribble(HEAD_30, 8, 30, "background")
+    job = window.tools.roto.paint(stroke)
+    with qtbot.waitSignal(job.succeeded, timeout=60_000):
+        pass
+    # The same as segmenting the clip with that one stroke from the start: nothing of the
+    # cancelled correction is left in the engine.
+    fresh = RotoSession.start(window.state.source, segmented.with_scribbles((stroke,)))
+    assert window.state.project.silhouettes == fresh.silhouettes()
 
 
 def test_strokes_before_segmenting_refine_the_first_frame_and_are_used(qtbot, window,
-                                                                        canter_clip):
+                                                                        canter_clip,
+                                                                        artifacts_dir):
     window.open_path(canter_clip / "images")
     wait_ready(qtbot, window)
     choose_tool(window, Tool.BOX)
     drag(qtbot, window, BOX_DRAG)
-    qtbot.waitUntil(lambda: window.frame_view._preview is not None, timeout=20_000)
+    qtbot.waitUntil(lambda: window.frame_view.preview is not None, timeout=20_000)
     wait_ready(qtbot, window)
-    cut = window.frame_view._preview.copy()
+    cut = window.frame_view.preview.copy()
     assert cut.shape == (240, 320) and 0.05 < cut.mean() < 0.6
-    _paint(qtbot, window, Tool.BACKGROUND_BRUSH, 0, [(60, 110), (160, 110), (260, 110)])
-    qtbot.waitUntil(lambda: not np.array_equal(window.frame_view._preview, cut), timeout=20_000)
-    assert window.frame_view._preview.sum() < cut.sum()
+    window.grab().save(str(artifacts_dir / "app_first_frame_cutout.png"))
+    _paint(qtbot, window, Tool.BACKGROUND_BRUSH, 0, HEAD_0)
+    qtbot.waitUntil(lambda: not np.array_equal(window.frame_view.preview, cut), timeout=20_000)
+    assert window.frame_view.preview.sum() < cut.sum()
+    window.grab().save(str(artifacts_dir / "app_first_frame_cutout_refined.png"))
     assert window.state.project.silhouettes is None and window.state.undo_stack.count() == 2
     job = window.tools.segment()
     with qtbot.waitSignal(job.succeeded, timeout=60_000):
         pass
-    assert window.tools.roto._session.states()[0].corrected
+    assert window.tools.roto.session.states()[0].corrected
 
 
 def test_scribbles_and_masks_round_trip(qtbot, window, canter_clip, asker, tmp_path):
