@@ -36,9 +36,10 @@ from gaitcore.silhouettes.roto import FrameState, RotoSegmentation
 from gaitcore.silhouettes.segmentation import SegmentationSettings, roto_frame
 from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiAccumulator
 
-MAX_SAVED_STATES = 6
+MAX_SAVED_STATES = 4
 """States kept for undo: each is a copy of the engine (bit-packed masks at the working size,
-a few megabytes per thousand frames) and of the crops."""
+about 4 MB per thousand frames of a 960x540 clip) and shares the crops of the frames a
+correction did not change."""
 ROI_MARGIN = 0.05
 """Border of the ROI windows, as :func:`gaitcore.silhouettes.segmentation.segment_clip`."""
 
@@ -64,8 +65,10 @@ class _EngineState:
     key: tuple
 
     def copied(self, source) -> _EngineState:
-        """A deep copy sharing the footage (frames are decoded again, never copied)."""
-        return copy.deepcopy(self, memo={id(source): source})
+        """A copy: the engine deep-copied but for the footage (frames are decoded again,
+        never copied), the crops shared until replaced (:meth:`RoiAccumulator.copy`)."""
+        engine = copy.deepcopy(self.engine, memo={id(source): source})
+        return _EngineState(engine, self.crops.copy(), list(self.states), self.key)
 
 
 class RotoSession:
