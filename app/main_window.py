@@ -231,7 +231,8 @@ class MainWindow(QMainWindow):
         tools.addActions(list(self.tools.tool_actions.values()))
         tools.addSeparator()
         tools.addActions([self.tools.segment_action, self.tools.copy_action,
-                          self.tools.propagate_action, self.tools.sketch_action])
+                          self.tools.propagate_action, self.tools.sketch_action,
+                          self.tools.sketch_engine_action])
 
         view = bar.addMenu("&View")
         for key, flag in (("silhouette", "Silhouette overlay"), ("onion", "Onion skin (previous strokes)")):

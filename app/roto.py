@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 from PySide6.QtCore import QObject
 
-from app.commands import AddScribblesCommand, SetSilhouettesCommand
+from app.commands import AddScribblesCommand, ProjectCommand, SetSilhouettesCommand
 from app.document import DocumentController
 from app.state import AppState
 from app.widgets.frame_view import FrameView
@@ -29,6 +29,7 @@ from gaitcore.project.roto_session import (
     export_masks,
     preview_first_frame,
     segmentation_key,
+    sketch_as_scribbles,
 )
 from gaitcore.project.steps import check_segmentation_input
 from gaitcore.silhouettes.annotations import Scribble
@@ -161,6 +162,36 @@ class RotoController(QObject):
         elif pending:
             self._documents.messageRaised.emit(f"{len(pending)} stroke(s) painted during the "
                                                "correction were dropped with it")
+
+    def propagate_sketch(self) -> Job | None:
+        """The strokes sketched on the current frame, through the segmentation engine in one
+        action: they become subject brush strokes there and re-propagate (one undo step); on
+        a clip not segmented yet, sketched on the first frame, a box around them is drawn
+        with them (one undo step) and the clip is segmented."""
+        state, project, source = self._state, self._state.project, self._state.source
+        if source is None:
+            self._documents.messageRaised.emit("open footage first")
+            return None
+        try:
+            scribbles, box = sketch_as_scribbles(project.strokes_on(state.frame),
+                                                 source.shape[:2])
+        except GaitInputError as exc:
+            self._documents.messageRaised.emit(str(exc))
+            return None
+        if project.silhouettes is not None and project.silhouettes.origin == "segmented":
+            return self.add_scribbles(scribbles, "propagate sketched")
+        try:
+            check_segmentation_input(project)
+        except GaitInputError:
+            if state.frame != 0:
+                self._documents.asker.error(
+                    "Propagate the sketch", "sketch the animal on the first frame, or draw a "
+                    "box around it there (A), then propagate")
+                return None
+            project = replace(project, box=box)
+        state.undo_stack.push(ProjectCommand(state, project.with_scribbles(tuple(scribbles)),
+                                             "sketch as subject strokes", frame=state.frame))
+        return self.segment()
 
     # -- first frame ------------------------------------------------------------------------
     def _refresh_preview(self, project) -> None:

@@ -84,6 +84,9 @@ class ToolsController(QObject):
                                              self.propagate)
         self.sketch_action = self._action("Use sketches as silhouettes", "Ctrl+Shift+K",
                                           self.use_sketches)
+        self.sketch_engine_action = self._action("Propagate this frame's sketch with the "
+                                                 "segmentation", "Ctrl+Shift+G",
+                                                 self.roto.propagate_sketch)
         for action in (self.segment_action, self.copy_action, self.propagate_action, self.sketch_action):
             self.toolbar.addAction(action)
 

@@ -31,9 +31,10 @@ from gaitcore.io.scribbles import write_segmentation_json
 from gaitcore.progress import Progress, report
 from gaitcore.project.document import Project, Silhouettes
 from gaitcore.project.steps import check_segmentation_input
-from gaitcore.silhouettes.annotations import Scribble
+from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
 from gaitcore.silhouettes.roto import FrameState, RotoSegmentation
 from gaitcore.silhouettes.segmentation import SegmentationSettings, roto_frame
+from gaitcore.silhouettes.sketch import rasterize_strokes
 from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiAccumulator
 
 MAX_SAVED_STATES = 4
@@ -275,6 +276,37 @@ def preview_first_frame(source: FrameSource, project: Project,
     engine.run()
     report(progress, 2, 2, "first-frame cut-out cancelled")
     return engine.mask(0)
+
+
+def sketch_as_scribbles(strokes: Sequence[Stroke], shape: tuple[int, int], *,
+                        pad: float = 0.04) -> tuple[list[Scribble], Rect]:
+    """Sketch strokes as subject brush strokes for the segmentation engine, and a box around
+    them grown by ``pad`` of its size on each side (the scripted user's box).
+
+    The sketched pixels become sure subject on their frame; with the box on the first frame,
+    the engine cuts the animal there and carries it across the clip in one run, instead of a
+    sketch per frame (paper Section 2.2's fallback).
+
+    Parameters
+    ----------
+    strokes : sequence of Stroke
+        Strokes of one frame.
+    shape : (rows, cols)
+        The frame's size.
+
+    Raises
+    ------
+    GaitInputError
+        No stroke, or the strokes lie outside the frame.
+    """
+    if not strokes:
+        raise GaitInputError("sketch the animal on this frame first (D), then propagate")
+    x, y, w, h = cv2.boundingRect(rasterize_strokes(strokes, shape))
+    if w == 0:
+        raise GaitInputError("the strokes lie outside the frame: sketch over the animal")
+    dx, dy = round(pad * w) + 1, round(pad * h) + 1
+    box = Rect(x - dx, y - dy, w + 2 * dx, h + 2 * dy).clipped_to(shape[1], shape[0])
+    return [Scribble(s.points_xy, s.width_px, s.frame, "subject") for s in strokes], box
 
 
 def export_masks(session: RotoSession, out_dir: Path, *, source_name: str = "",

@@ -8,10 +8,11 @@ import cv2
 import numpy as np
 import pytest
 
+from app.commands import AddStrokesCommand
 from app.widgets.frame_canvas import Tool
 from app.widgets.timeline import CORRECTED_COLOUR
 from gaitcore.project.roto_session import RotoSession
-from gaitcore.silhouettes.annotations import Scribble
+from gaitcore.silhouettes.annotations import Scribble, Stroke
 from tests.app.conftest import wait_ready
 from tests.app.test_main_window import choose_tool, drag
 
@@ -226,3 +227,36 @@ def test_real_footage_box_and_a_correction_keep_the_legs(qtbot, window, shared_d
     qtbot.wait(200)
     wait_ready(qtbot, window)
     window.grab().save(str(artifacts_dir / "app_real_footage_legs.png"))
+
+
+SKETCH_0 = [  # rough strokes over the canter's frame 0: spine to head, ear, tail, four legs
+    [(60, 110), (130, 105), (200, 100), (232, 80), (258, 70), (280, 92)],
+    [(247, 58), (250, 70)],
+    [(20, 138), (40, 125)],
+    [(112, 140), (118, 170), (124, 185)],
+    [(128, 150), (132, 170), (138, 185), (142, 200)],
+    [(168, 140), (155, 170), (147, 185)],
+    [(222, 140), (224, 170), (209, 185)],
+]
+
+
+def test_a_sketch_on_one_frame_propagates_with_the_engine_in_one_action(qtbot, window,
+                                                                        canter_clip):
+    window.open_path(canter_clip / "images")
+    wait_ready(qtbot, window)
+    for points in SKETCH_0:  # as the draw tool makes them (mouse strokes: test_main_window)
+        window.state.undo_stack.push(AddStrokesCommand(window.state, [Stroke(points, 5, 0)]))
+    assert len(window.state.project.strokes) == len(SKETCH_0)
+    window.tools.sketch_engine_action.trigger()
+    qtbot.waitUntil(lambda: window.state.project.silhouettes is not None, timeout=60_000)
+    project = window.state.project
+    assert project.box is not None and project.corrected_frames() == (0,)
+    assert all(sc.label == "subject" for sc in project.scribbles)
+    assert window.state.undo_stack.count() == len(SKETCH_0) + 2  # + sketch as strokes, segment
+    session = window.tools.roto.session
+    scores = []
+    for t in range(0, 100, 9):
+        truth = cv2.imread(str(canter_clip / "masks" / f"{t:05d}.png"), cv2.IMREAD_GRAYSCALE) > 0
+        mask = session.mask(t) > 0
+        scores.append((mask & truth).sum() / (mask | truth).sum())
+    assert min(scores) > 0.8, np.round(scores, 2)
