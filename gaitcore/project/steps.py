@@ -37,9 +37,9 @@ from gaitcore.silhouettes.tracking import WORK_SIDE_PX, crop_rois
 
 __all__ = [
     "Animation", "CLAMP_RANGE", "CENTIMETRE_RIG_M", "alternates_in_use", "analyze",
-    "animate_project", "check_segmentation_input", "frame_rate", "frames_to_pose", "missing_poses", "open_source",
+    "animate_project", "frame_rate", "frames_to_pose", "missing_poses", "open_source",
     "read_rig", "rekey", "segment", "silhouettes_from_masks", "sketched_silhouettes",
-    "swap_warning_for",
+    "swap_warning_for", "check_segmentation_input",
 ]
 
 CLAMP_RANGE = (0.0, 1.0)
