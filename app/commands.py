@@ -15,7 +15,7 @@ from PySide6.QtGui import QUndoCommand
 from app.state import AppState
 from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.project.document import AnimationOptions, FootageFit, Project, Silhouettes
-from gaitcore.silhouettes.annotations import Rect, Stroke
+from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
 
 
 @unique
@@ -102,6 +102,18 @@ class EraseStrokesCommand(ProjectCommand):
         frame = strokes[min(indices)].frame if indices else None
         text = "erase stroke" if len(indices) == 1 else f"erase {len(indices)} strokes"
         super().__init__(state, state.project.without_strokes(indices), text, frame=frame)
+
+
+class AddScribblesCommand(ProjectCommand):
+    """Add brush strokes; with ``silhouettes``, the segmentation they corrected too (one
+    correction is one undo step: undo puts back both the strokes and the silhouettes)."""
+
+    def __init__(self, state: AppState, scribbles: list[Scribble], text: str, *,
+                 silhouettes: Silhouettes | None = None) -> None:
+        after = state.project.with_scribbles(tuple(scribbles))
+        if silhouettes is not None:
+            after = replace(after, silhouettes=silhouettes)
+        super().__init__(state, after, text, frame=scribbles[0].frame if scribbles else None)
 
 
 class PinKeyCommand(ProjectCommand):

@@ -106,6 +106,11 @@ class Asker:
         p = Path(path)
         return p if p.suffix else p.with_suffix(suggested.suffix)
 
+    def export_folder(self, title: str, suggested: Path) -> Path | None:
+        """A folder to export into, created when new (None: cancelled)."""
+        path = QFileDialog.getExistingDirectory(self._parent, title, str(suggested.parent))
+        return Path(path) if path else None
+
     def export_options(self, title: str, options: AnimationOptions) -> AnimationOptions | None:
         """The export options, shown with ``options`` filled in (None: cancelled)."""
         dialog = ExportOptionsDialog(options, self._parent)
@@ -174,6 +179,9 @@ class HeadlessAsker(Asker):
         return None
 
     def export_path(self, title: str, suggested: Path, file_filter: str) -> Path | None:
+        return None
+
+    def export_folder(self, title: str, suggested: Path) -> Path | None:
         return None
 
     def export_options(self, title: str, options: AnimationOptions) -> AnimationOptions | None:

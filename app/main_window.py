@@ -198,6 +198,11 @@ class MainWindow(QMainWindow):
             suffix: self._action(export, f"{label}...", None, lambda s=suffix: self.exporter.export(s))
             for suffix, label in KINDS.items()
         }
+        export.addSeparator()
+        roto = self.tools.roto
+        self._action(export, "Masks and segmentation.json...", None, roto.export_masks)
+        self._action(export, "Scribbles (brush strokes)...", None, roto.export_scribbles)
+        self._action(file, "&Import scribbles...", None, roto.import_scribbles)
         file.addSeparator()
         self._action(file, "&Quit", QKeySequence.StandardKey.Quit, self.close)
 
@@ -226,7 +231,8 @@ class MainWindow(QMainWindow):
         tools.addActions(list(self.tools.tool_actions.values()))
         tools.addSeparator()
         tools.addActions([self.tools.segment_action, self.tools.copy_action,
-                          self.tools.propagate_action, self.tools.sketch_action])
+                          self.tools.propagate_action, self.tools.sketch_action,
+                          self.tools.sketch_engine_action])
 
         view = bar.addMenu("&View")
         for key, flag in (("silhouette", "Silhouette overlay"), ("onion", "Onion skin (previous strokes)")):

@@ -1,8 +1,11 @@
 """Segmentation and sketch tools: the toolbar, and the gaitcore calls behind it.
 
-Segmenting and rasterizing sketches are :mod:`gaitcore.project.steps`; moving strokes from
-frame to frame is in the two functions at the top. Long work runs as a job with a progress
-dialog and Cancel; results land as undoable commands.
+The box (A) and the subject and background brushes (S, B: any frame, the Roto Brush model)
+feed the segmentation, which :class:`app.roto.RotoController` runs and corrects; the paper's
+subject and background rectangles on the first frame (Shift+S, Shift+B) still work.
+Rasterizing sketches is :mod:`gaitcore.project.steps`; moving strokes from frame to frame is
+in the two functions at the top. Long work runs as a job with a progress dialog and Cancel;
+results land as undoable commands.
 """
 
 from __future__ import annotations
@@ -13,18 +16,25 @@ from PySide6.QtWidgets import QSpinBox, QToolBar
 
 from app.commands import AddStrokesCommand, SetSilhouettesCommand
 from app.document import DocumentController
+from app.roto import RotoController
 from app.state import AppState
 from app.widgets.frame_canvas import Tool
 from app.widgets.frame_view import FrameView
 from app.workers import Job
 from gaitcore.footage.sources import FrameSource
 from gaitcore.project.document import Project
-from gaitcore.project.steps import segment, sketched_silhouettes
+from gaitcore.project.steps import sketched_silhouettes
 from gaitcore.silhouettes.annotations import Stroke
 from gaitcore.silhouettes.sketch import carry_strokes, propagate_strokes
 
-TOOL_KEYS = {Tool.NAVIGATE: "N", Tool.BOX: "A", Tool.SUBJECT: "S", Tool.BACKGROUND: "B", Tool.DRAW: "D",
-             Tool.ERASE: "E"}
+TOOL_KEYS = {Tool.NAVIGATE: "N", Tool.BOX: "A", Tool.SUBJECT_BRUSH: "S",
+             Tool.BACKGROUND_BRUSH: "B", Tool.DRAW: "D", Tool.ERASE: "E",
+             Tool.SUBJECT: "Shift+S", Tool.BACKGROUND: "Shift+B"}
+"""Shortcut of each tool: the brushes, the main way to mark subject and background on any
+frame, get the plain letters; the paper's rectangles (first frame only) the shifted ones."""
+TOOLBAR_TOOLS = (Tool.NAVIGATE, Tool.BOX, Tool.SUBJECT_BRUSH, Tool.BACKGROUND_BRUSH, Tool.DRAW,
+                 Tool.ERASE)
+"""Tools on the toolbar; the rectangles are in the Tools menu only."""
 
 
 def copied_strokes(project: Project, frame: int) -> list[Stroke]:
@@ -47,7 +57,7 @@ class ToolsController(QObject):
         self._state = state
         self._view = view
         self._documents = documents
-        self._segmenting: Job | None = None
+        self.roto = RotoController(state, view, documents, self)
         self.toolbar = QToolBar("Tools")
         self.toolbar.setObjectName("toolsToolBar")
         self.tool_actions: dict[Tool, QAction] = {}
@@ -58,11 +68,12 @@ class ToolsController(QObject):
             action.setToolTip(f"{tool.value.capitalize()} ({key})")
             action.triggered.connect(lambda _c=False, t=tool: view.set_tool(t))
             group.addAction(action)
-            self.toolbar.addAction(action)
+            if tool in TOOLBAR_TOOLS:
+                self.toolbar.addAction(action)
             self.tool_actions[tool] = action
         self.tool_actions[Tool.NAVIGATE].setChecked(True)
         self.pen = QSpinBox(minimum=1, maximum=60, value=int(view.pen_width_px), suffix=" px")
-        self.pen.setToolTip("Pen width of new strokes")
+        self.pen.setToolTip("Pen width of new strokes and brush strokes")
         self.pen.valueChanged.connect(lambda v: setattr(view, "pen_width_px", float(v)))
         self.toolbar.addWidget(self.pen)
         self.toolbar.addSeparator()
@@ -73,6 +84,9 @@ class ToolsController(QObject):
                                              self.propagate)
         self.sketch_action = self._action("Use sketches as silhouettes", "Ctrl+Shift+K",
                                           self.use_sketches)
+        self.sketch_engine_action = self._action("Propagate this frame's sketch with the "
+                                                 "segmentation", "Ctrl+Shift+G",
+                                                 self.roto.propagate_sketch)
         for action in (self.segment_action, self.copy_action, self.propagate_action, self.sketch_action):
             self.toolbar.addAction(action)
 
@@ -84,29 +98,12 @@ class ToolsController(QObject):
 
     # -- segmentation -----------------------------------------------------------------------
     def segment(self) -> Job | None:
-        """Segment the clip in the background; the result is an undoable command."""
-        state, project, source = self._state, self._state.project, self._state.source
-        if source is None:
-            self._documents.messageRaised.emit("open footage first")
-            return None
-        if project.box is None and not (project.subject_rects and project.background_rects):
-            self._documents.asker.error(
-                "Segment clip", "Draw a box around the animal (A) on the first frame, or at "
-                "least one subject rectangle (S) and one background rectangle (B), then "
-                "segment again.")
-            return None
-        if self._segmenting is not None:
-            return self._segmenting
-        job = Job(lambda progress: segment(source, project, progress), "Segmenting the clip")
-        job.finished.connect(self._segment_finished)
-        self._segmenting = job
-        self.segment_action.setEnabled(False)
-        return self._documents.run(job, lambda sil: state.undo_stack.push(
-            SetSilhouettesCommand(state, sil, "segment clip")))
-
-    def _segment_finished(self) -> None:
-        self._segmenting = None
-        self.segment_action.setEnabled(True)
+        """Segment the clip in the background (:meth:`RotoController.segment`)."""
+        job = self.roto.segment()
+        if job is not None and self.segment_action.isEnabled():
+            self.segment_action.setEnabled(False)
+            job.finished.connect(lambda: self.segment_action.setEnabled(True))
+        return job
 
     def use_sketches(self) -> Job | None:
         """Build the silhouettes from the sketch strokes of every frame."""

@@ -18,6 +18,8 @@ class Tool(Enum):
 
     NAVIGATE = "navigate"
     BOX = "box around the animal"
+    SUBJECT_BRUSH = "subject brush"
+    BACKGROUND_BRUSH = "background brush"
     SUBJECT = "subject rectangle"
     BACKGROUND = "background rectangle"
     DRAW = "draw"
@@ -29,7 +31,12 @@ class Tool(Enum):
 
     @property
     def draws_path(self) -> bool:
-        return self in (Tool.DRAW, Tool.ERASE)
+        return self in (Tool.DRAW, Tool.ERASE, Tool.SUBJECT_BRUSH, Tool.BACKGROUND_BRUSH)
+
+    @property
+    def brush_label(self) -> str | None:
+        """The scribble label a brush paints ("subject" or "background"), else None."""
+        return {Tool.SUBJECT_BRUSH: "subject", Tool.BACKGROUND_BRUSH: "background"}.get(self)
 
 
 class CanvasViewBox(pg.ViewBox):

@@ -1,4 +1,5 @@
-"""The footage with its overlays: silhouette tint, ROI window, rectangles, strokes, onion skin.
+"""The footage with its overlays: silhouette tint, ROI window, rectangles, strokes, brush
+strokes, onion skin, and the first frame's cut-out before the clip is segmented.
 
 Frames are decoded by a :class:`app.workers.FrameLoader` (latest request wins); the image and
 the overlays of one frame are always shown together. Drawing on the frame (rectangles,
@@ -25,7 +26,7 @@ from app.state import AppState
 from app.widgets.frame_canvas import CanvasViewBox, Tool
 from app.workers import FrameLoader
 from gaitcore.errors import GaitInputError
-from gaitcore.silhouettes.annotations import Rect, Stroke
+from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
 
 TINT_RGBA = (0, 190, 255, 100)
 SUBJECT_COLOUR = QColor(40, 200, 60)
@@ -70,10 +71,14 @@ class FrameView(QWidget):
         Frame ``i`` and its overlays are now on screen.
     messageRaised(str)
         A one-line message for the status bar.
+    scribblePainted(Scribble)
+        A subject or background brush stroke was painted on the current frame (the tools
+        decide whether it re-propagates the segmentation).
     """
 
     frameShown = Signal(int)
     messageRaised = Signal(str)
+    scribblePainted = Signal(object)
 
     def __init__(self, state: AppState, loader: FrameLoader, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -97,6 +102,8 @@ class FrameView(QWidget):
         self._overlays: list = []
         self._live: list = []
         self._erasing: set[int] = set()
+        self._pending: tuple[Scribble, ...] = ()
+        self._preview: np.ndarray | None = None
         self._shown = -1
         self._size: tuple[int, int] | None = None
         self.pen_width_px = 6.0
@@ -131,6 +138,22 @@ class FrameView(QWidget):
         if onion is not None:
             self.show_onion = onion
         self._draw_overlays()
+
+    def set_pending(self, scribbles: tuple[Scribble, ...]) -> None:
+        """Brush strokes painted but not yet in the project (a correction is running)."""
+        self._pending = tuple(scribbles)
+        self._draw_overlays()
+
+    def set_preview(self, mask: np.ndarray | None) -> None:
+        """The first frame's cut-out, (rows, cols) bool, shown on frame 0 while the clip has
+        no silhouettes (None: none)."""
+        self._preview = mask
+        self._draw_overlays()
+
+    @property
+    def preview(self) -> np.ndarray | None:
+        """The first frame's cut-out shown before the clip is segmented (None: none)."""
+        return self._preview
 
     def image_item(self) -> pg.ImageItem:
         """The footage image item (for tests and benchmarks)."""
@@ -172,9 +195,10 @@ class FrameView(QWidget):
         if frame < 0:
             return
         self._draw_silhouette(frame)
-        box = () if project.box is None else (project.box,)
-        for rects, colour in ((box, BOX_COLOUR), (project.subject_rects, SUBJECT_COLOUR),
-                              (project.background_rects, BACKGROUND_COLOUR)):
+        box = () if project.box is None or frame != 0 else (project.box,)
+        rects_0 = (project.subject_rects, project.background_rects) if frame == 0 else ((), ())
+        for rects, colour in ((box, BOX_COLOUR), (rects_0[0], SUBJECT_COLOUR),
+                              (rects_0[1], BACKGROUND_COLOUR)):  # first-frame annotations
             for r in rects:
                 self._add_overlay(_rect_item(QRectF(r.x, r.y, r.w, r.h), colour), 3)
         if self.show_onion and frame > 0:
@@ -184,6 +208,8 @@ class FrameView(QWidget):
             if s.frame == frame:
                 colour = ERASE_COLOUR if i in self._erasing else STROKE_COLOUR
                 self._add_overlay(_path_item(s.points_xy, s.width_px, colour), 4)
+        for sc in project.scribbles_on(frame) + tuple(p for p in self._pending if p.frame == frame):
+            self._add_overlay(_path_item(sc.points_xy, sc.width_px, _brush_colour(sc.label)), 4)
 
     def _add_overlay(self, item, z: float) -> None:
         item.setZValue(z)
@@ -196,6 +222,7 @@ class FrameView(QWidget):
         self._window.setVisible(box is not None)
         self._tint.setVisible(box is not None and self.show_silhouette)
         if box is None:
+            self._draw_preview(frame, sil is None)
             return
         rect = QRectF(*box)
         self._window.setRect(rect)
@@ -205,6 +232,17 @@ class FrameView(QWidget):
             rgba[crop] = TINT_RGBA
             self._tint.setImage(rgba, autoLevels=False, levels=(0, 255))
             self._tint.setRect(rect)
+
+    def _draw_preview(self, frame: int, unsegmented: bool) -> None:
+        """The first frame's cut-out (before the clip is segmented), full frame."""
+        mask = self._preview
+        if mask is None or frame != 0 or not unsegmented or not self.show_silhouette:
+            return
+        rgba = np.zeros(mask.shape + (4,), np.uint8)
+        rgba[mask] = TINT_RGBA
+        self._tint.setImage(rgba, autoLevels=False, levels=(0, 255))
+        self._tint.setRect(QRectF(0, 0, mask.shape[1], mask.shape[0]))
+        self._tint.setVisible(True)
 
     # -- drawing --------------------------------------------------------------------------
     def _clear_live(self) -> None:
@@ -268,12 +306,24 @@ class FrameView(QWidget):
                 self._erasing = hits
                 self._draw_overlays()
             return
+        label = self.canvas.tool.brush_label
         if not finished:
-            self._set_live(_path_item(points, self.pen_width_px, STROKE_COLOUR))
+            colour = STROKE_COLOUR if label is None else _brush_colour(label)
+            self._set_live(_path_item(points, self.pen_width_px, colour))
             return
         self._clear_live()
+        if label is not None:
+            self.scribblePainted.emit(Scribble(_thin(points), self.pen_width_px, frame, label))
+            return
         stroke = Stroke(_thin(points), self.pen_width_px, frame)
         self._state.undo_stack.push(AddStrokesCommand(self._state, [stroke]))
+
+
+def _brush_colour(label: str) -> QColor:
+    """Subject strokes green, background strokes magenta, see-through."""
+    colour = QColor(SUBJECT_COLOUR if label == "subject" else BACKGROUND_COLOUR)
+    colour.setAlpha(170)
+    return colour
 
 
 def _thin(points: np.ndarray, min_step_px: float = 1.0) -> np.ndarray:

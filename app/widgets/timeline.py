@@ -2,8 +2,9 @@
 
 Clicking or dragging moves the current frame. Marks: key-images (orange triangles above the
 track; the selected key outlined in red), proposed alternates (cyan outlines), accepted alternates (cyan triangles), pinned
-keys (a dot), dropped keys (a grey cross), lost frames (red ticks), sketched frames (yellow
-ticks under the track).
+keys (a dot), dropped keys (a grey cross), lost frames (red ticks: the segmentation lost the
+subject there), frames corrected with the subject or background brush (violet bars across the
+track, with a violet diamond under it), sketched frames (yellow ticks under the track).
 
 The trim (the in and out marks, set with I and O) darkens the frames outside it and has a
 handle at each end that can be dragged (one undo step per drag). Under the track, green bars
@@ -24,6 +25,7 @@ KEY_COLOUR = QColor(255, 140, 0)
 ALTERNATE_COLOUR = QColor(0, 170, 220)
 LOST_COLOUR = QColor(220, 30, 30)
 SKETCH_COLOUR = QColor(230, 190, 0)
+CORRECTED_COLOUR = QColor(175, 110, 255)
 CURSOR_COLOUR = QColor(200, 0, 0)
 TRIM_COLOUR = QColor(250, 250, 250)
 OUTSIDE_SHADE = QColor(0, 0, 0, 150)
@@ -200,6 +202,19 @@ class TimelineWidget(QWidget):
             p.fillRect(QRectF(self.x_of(f) - width / 2, track.top(), width, track.height()), LOST_COLOUR)
         for f in project.sketched_frames():
             p.fillRect(QRectF(self.x_of(f) - width / 2, track.bottom() + 2, width, 4), SKETCH_COLOUR)
+        self._paint_corrected(p, track, width)
+
+    def _paint_corrected(self, p: QPainter, track: QRectF, width: float) -> None:
+        """Frames that carry brush strokes: a bar across the track and a diamond under it."""
+        p.setPen(Qt.PenStyle.NoPen)
+        p.setBrush(CORRECTED_COLOUR)
+        for f in self._state.project.corrected_frames():
+            x = self.x_of(f)
+            p.fillRect(QRectF(x - max(width, 3.0) / 2, track.top(), max(width, 3.0), track.height()),
+                       CORRECTED_COLOUR)
+            y = track.bottom() + 4  # above the row of steady-gait bars
+            p.drawPolygon(QPolygonF([QPointF(x, y - 4), QPointF(x + 3.5, y),
+                                     QPointF(x, y + 3.5), QPointF(x - 3.5, y)]))
 
     def _paint_trim(self, p: QPainter, track: QRectF, n: int) -> None:
         start, stop = self.trim_range()

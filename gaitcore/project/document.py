@@ -28,7 +28,7 @@ from gaitcore.io.bone_names import BONE_NAMINGS
 from gaitcore.io.motion import AUTO
 from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
-from gaitcore.silhouettes.annotations import Rect, Stroke
+from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
 
 ORIGINS = ("segmented", "sketched", "masks")
@@ -192,6 +192,10 @@ class Project:
         Drawn on the first frame to seed the colour models (paper Section 2.2).
     strokes : tuple of Stroke
         Sketch strokes of every frame (each knows its frame), in drawing order.
+    scribbles : tuple of Scribble
+        Subject and background brush strokes on any frame (source frame numbers), in
+        painting order: hard labels for the segmentation, which re-propagates from each
+        frame that has them (:mod:`gaitcore.silhouettes.roto`).
     settings : AnalysisSettings
         Number of PCs and keys, switching, and the pinned and forbidden key frames.
     alternates : tuple of int
@@ -221,6 +225,7 @@ class Project:
     subject_rects: tuple[Rect, ...] = ()
     background_rects: tuple[Rect, ...] = ()
     strokes: tuple[Stroke, ...] = ()
+    scribbles: tuple[Scribble, ...] = ()
     settings: AnalysisSettings = field(default_factory=AnalysisSettings)
     alternates: tuple[int, ...] = ()
     key_poses: Mapping[int, tuple[float, ...]] = field(default_factory=dict)
@@ -238,7 +243,7 @@ class Project:
                 f"frame range {self.frame_start}:{self.frame_stop} is empty or negative: "
                 "choose 0 <= start < stop"
             )
-        for name in ("subject_rects", "background_rects", "strokes", "alternates"):
+        for name in ("subject_rects", "background_rects", "strokes", "scribbles", "alternates"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
         poses = {int(k): tuple(float(v) for v in pose) for k, pose in self.key_poses.items()}
         object.__setattr__(self, "key_poses", MappingProxyType(poses))
@@ -275,6 +280,14 @@ class Project:
         """Sorted frames that hold at least one stroke."""
         return tuple(sorted({s.frame for s in self.strokes}))
 
+    def scribbles_on(self, frame: int) -> tuple[Scribble, ...]:
+        """Brush strokes painted on source frame ``frame``, in painting order."""
+        return tuple(s for s in self.scribbles if s.frame == frame)
+
+    def corrected_frames(self) -> tuple[int, ...]:
+        """Sorted frames that hold at least one brush stroke (the segmentation's keys)."""
+        return tuple(sorted({s.frame for s in self.scribbles}))
+
     # -- edits: each returns a new project ---------------------------------------------
     def with_rect(self, rect: Rect, *, subject: bool) -> Project:
         """A copy with ``rect`` appended to the subject (or background) rectangles."""
@@ -302,6 +315,10 @@ class Project:
     def with_strokes(self, strokes: tuple[Stroke, ...]) -> Project:
         """A copy with ``strokes`` appended."""
         return replace(self, strokes=self.strokes + tuple(strokes))
+
+    def with_scribbles(self, scribbles: tuple[Scribble, ...]) -> Project:
+        """A copy with brush strokes ``scribbles`` appended."""
+        return replace(self, scribbles=self.scribbles + tuple(scribbles))
 
     def without_strokes(self, indices: set[int]) -> Project:
         """A copy without the strokes at positions ``indices`` of :attr:`strokes`."""

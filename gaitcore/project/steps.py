@@ -40,7 +40,7 @@ __all__ = [
     "Animation", "CLAMP_RANGE", "CENTIMETRE_RIG_M", "alternates_in_use", "analyze",
     "animate_project", "drag_library", "frame_rate", "frames_to_pose", "missing_poses", "open_source",
     "read_rig", "rekey", "segment", "silhouettes_from_masks", "sketched_silhouettes",
-    "swap_warning_for",
+    "swap_warning_for", "check_segmentation_input",
 ]
 
 CLAMP_RANGE = (0.0, 1.0)
@@ -86,7 +86,12 @@ def segment(source: FrameSource, project: Project, progress: Progress | None = N
             box: Rect | None = None,
             mask_sink: Callable[[int, np.ndarray], None] | None = None) -> Silhouettes:
     """Segment the whole clip from a box around the animal on the first frame (``box``, else
-    the project's), or from the project's rectangles (paper Section 2.2).
+    the project's), or from the project's rectangles (paper Section 2.2), with the project's
+    brush strokes (:attr:`Project.scribbles`) as hard labels on their frames.
+
+    The ``gaitcore segment`` command with the same box, rectangles and scribbles file gives
+    the same silhouettes. To keep the engine for corrections, use
+    :class:`gaitcore.project.roto_session.RotoSession` instead.
 
     Raises
     ------
@@ -94,13 +99,21 @@ def segment(source: FrameSource, project: Project, progress: Progress | None = N
         No box and not a subject and a background rectangle, or no subject found.
     """
     box = box or project.box
-    if box is None and not (project.subject_rects and project.background_rects):
+    check_segmentation_input(project, box)
+    rects = () if box is not None else (project.subject_rects, project.background_rects)
+    roi = segment_clip(source, *rects, box=box, scribbles=project.scribbles, progress=progress,
+                       mask_sink=mask_sink, max_side=WORK_SIDE_PX)
+    return Silhouettes(roi, "segmented")
+
+
+def check_segmentation_input(project: Project, box: Rect | None = None) -> None:
+    """Raise GaitInputError when the project gives the segmentation nothing to start from:
+    no box, no subject and background rectangles, and no subject brush stroke on frame 0."""
+    box = box or project.box
+    on_first = any(sc.label == "subject" for sc in project.scribbles_on(0))
+    if box is None and not (project.subject_rects and project.background_rects) and not on_first:
         raise GaitInputError("draw a box around the animal, or at least one subject and one "
                              "background rectangle, on the first frame, then segment again")
-    rects = () if box is not None else (project.subject_rects, project.background_rects)
-    roi = segment_clip(source, *rects, box=box, progress=progress, mask_sink=mask_sink,
-                       max_side=WORK_SIDE_PX)
-    return Silhouettes(roi, "segmented")
 
 
 def sketched_silhouettes(project: Project, n_frames: int, shape_rc: tuple[int, int],

@@ -1,6 +1,7 @@
 """Read and write Gait Studio projects: one JSON file plus a sidecar folder of arrays.
 
-``horse.gaitproj`` holds everything small (footage path, rectangles, strokes, settings, keys)
+``horse.gaitproj`` holds everything small (footage path, box, rectangles, strokes, brush
+strokes, settings, keys)
 as JSON with ``"format"`` and ``"version"``; ``horse.gaitproj.d/`` beside it holds the
 silhouette arrays as ``.npy`` files named after their content (the crops packed 8 pixels to a
 byte since version 2; version 1 files, with one byte per pixel, are still read). Since
@@ -32,7 +33,7 @@ from gaitcore.project.document import ORIGINS, AnimationOptions, FootageFit, Pro
 from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
 from gaitcore.schema import MAX_FPS, JsonValue, read_json, read_npy
-from gaitcore.silhouettes.annotations import Rect, Stroke
+from gaitcore.silhouettes.annotations import SCRIBBLE_LABELS, Rect, Scribble, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
 
 FORMAT = "gaitstudio-project"
@@ -172,6 +173,11 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
             {"frame": s.frame, "width_px": s.width_px, "points_xy": s.points_xy.tolist()}
             for s in project.strokes
         ],
+        "scribbles": [
+            {"frame": s.frame, "label": s.label, "width_px": s.width_px,
+             "points_xy": s.points_xy.tolist()}
+            for s in project.scribbles
+        ],
         "settings": {k: list(v) if isinstance(v, tuple) else v
                      for k, v in asdict(project.settings).items()},
         "alternates": list(project.alternates),
@@ -200,6 +206,7 @@ def _from_json(doc: JsonValue, p: Path) -> Project:
         subject_rects=_rects(doc.key("subject_rects")),
         background_rects=_rects(doc.key("background_rects")),
         strokes=tuple(_stroke(s) for s in doc.key("strokes").items(max_len=MAX_STROKES)),
+        scribbles=tuple(_scribble(s) for s in doc.key("scribbles", []).items(max_len=MAX_STROKES)),
         settings=_settings(doc.key("settings")),
         alternates=doc.key("alternates").integers(max_len=MAX_KEYS, lo=0, hi=MAX_FRAME),
         key_poses=_key_poses(doc.key("key_poses")),
@@ -247,6 +254,13 @@ def _stroke(entry: JsonValue) -> Stroke:
     points = entry.key("points_xy").array(columns=2, min_rows=1, max_rows=MAX_STROKE_POINTS)
     width = entry.key("width_px").number(lo=0, lo_open=True, hi=MAX_PIXELS)
     return Stroke(points, width, entry.key("frame").integer(lo=0, hi=MAX_FRAME))
+
+
+def _scribble(entry: JsonValue) -> Scribble:
+    """A brush stroke (projects saved before brushes existed have none)."""
+    stroke = _stroke(entry)
+    label = entry.key("label").text(choices=SCRIBBLE_LABELS)
+    return Scribble(stroke.points_xy, stroke.width_px, stroke.frame, label)
 
 
 def _settings(entry: JsonValue) -> AnalysisSettings:

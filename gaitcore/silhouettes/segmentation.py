@@ -205,19 +205,28 @@ def _collect_roto(seg: RotoSegmentation, mask_sink: MaskSink | None,
     """Every frame's mask of a finished propagation, all its components (legs may come
     apart), into the ROI accumulator and the sinks."""
     acc = RoiAccumulator()
+    shape = seg.mask(0).shape
     for t in range(seg.n):
-        mask = seg.mask(t)
-        state = seg.state(t)
-        found = None
-        if not state.lost and mask.any():
-            x, y, w, h = cv2.boundingRect(mask.astype(np.uint8))
-            m = cv2.moments(mask.astype(np.uint8), binaryImage=True)
-            found = (mask[y : y + h, x : x + w], np.array([x, y, w, h]),
-                     np.array([m["m10"] / m["m00"], m["m01"] / m["m00"]]))
-        _collect(acc, found, mask.shape, t, mask_sink)
+        found, state = roto_frame(seg, t)
+        _collect(acc, found, shape, t, mask_sink)
         if state_sink is not None:
             state_sink(t, state)
     return acc
+
+
+def roto_frame(seg: RotoSegmentation, t: int
+               ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray] | None, FrameState]:
+    """Frame ``t`` of a finished propagation as the ROI accumulator takes it: ``(crop, box,
+    center_xy)`` of the whole mask (all its components: legs may come apart), None where the
+    subject is lost; and what the segmentation says of the frame."""
+    mask = seg.mask(t)
+    state = seg.state(t)
+    if state.lost or not mask.any():
+        return None, state
+    x, y, w, h = cv2.boundingRect(mask.astype(np.uint8))
+    m = cv2.moments(mask.astype(np.uint8), binaryImage=True)
+    return (mask[y : y + h, x : x + w], np.array([x, y, w, h]),
+            np.array([m["m10"] / m["m00"], m["m01"] / m["m00"]])), state
 
 
 def _stream(source) -> Iterable[np.ndarray]:

@@ -151,6 +151,24 @@ class RoiAccumulator:
         self._items.append(None)
         self._centers.append(np.full(2, np.nan))
 
+    def copy(self) -> RoiAccumulator:
+        """A copy that shares the frames' packed crops (they are never changed in place:
+        :meth:`replace` puts new ones), so that keeping copies for undo costs little."""
+        other = RoiAccumulator()
+        other._items, other._centers = list(self._items), list(self._centers)
+        return other
+
+    def replace(self, t: int, found: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> None:
+        """Put frame ``t`` again: ``found`` is ``(crop, box, center_xy)`` as for :meth:`add`,
+        or None where the subject was lost (a correction re-cut the frame)."""
+        if found is None:
+            self._items[t], self._centers[t] = None, np.full(2, np.nan)
+            return
+        crop, box, center_xy = found
+        crop = np.asarray(crop, dtype=bool)
+        self._items[t] = (np.packbits(crop, axis=None), crop.shape, np.asarray(box, int))
+        self._centers[t] = np.asarray(center_xy, dtype=float)
+
     def finish(self, *, margin: float = 0.05, max_side: int | None = None) -> RoiClip:
         """Cut the fixed-size windows.
 

@@ -100,6 +100,10 @@ class ScriptedAsker(Asker):
         self.asked.append(title)
         return self.next_export_path
 
+    def export_folder(self, title: str, suggested: Path) -> Path | None:
+        self.asked.append(title)
+        return self.next_export_path
+
     def export_options(self, title: str, options):
         self.asked.append(f"{title}: options")
         return options if self.export_answer == "keep" else self.export_answer

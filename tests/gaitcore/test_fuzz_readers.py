@@ -27,7 +27,7 @@ from gaitcore.project.storage import load_project, save_project, sidecar_dir
 from gaitcore.rig.skeleton import Skeleton
 from gaitcore.rig.templates import load_template
 from gaitcore.schema import MAX_FPS
-from gaitcore.silhouettes.annotations import Rect, Stroke
+from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
 from tests.fuzzing import (
     DEFAULT_CASES,
@@ -65,6 +65,7 @@ def valid_project(tmp_path_factory) -> Path:
         footage=folder / "clip", frame_start=1, frame_stop=7, fps=24.0,
         subject_rects=(Rect(1, 2, 30, 40),), background_rects=(Rect(0, 0, 5, 5),),
         strokes=(Stroke([[1.25, 2.5], [3.0, 4.125]], 3.5, 2),),
+        scribbles=(Scribble([[4.5, 6.0], [8.0, 9.25]], 6.0, 3, "background"),),
         settings=AnalysisSettings(pcs=3, keys=5, switching=True, pinned=(1,), forbidden=(4,)),
         alternates=(3, 5), key_poses={2: tuple(POSES[0])}, skeleton=HORSE,
         silhouettes=Silhouettes(roi, "segmented"))

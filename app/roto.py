@@ -1,0 +1,300 @@
+"""Segmentation from a box, corrected by brush strokes on any frame (the Roto Brush model).
+
+The controller keeps the project's :class:`~gaitcore.project.roto_session.RotoSession` (the
+engine of the last segmentation) and runs on it, as jobs with progress and Cancel: segmenting
+the clip, re-propagating a brush correction (one undo step: the strokes and the silhouettes
+they corrected), the first frame's cut-out before the clip runs, exporting masks and
+``segmentation.json``, and importing or exporting scribbles files. Everything it computes is
+:mod:`gaitcore.project.roto_session`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+from PySide6.QtCore import QObject
+
+from app.commands import AddScribblesCommand, ProjectCommand, SetSilhouettesCommand
+from app.document import DocumentController
+from app.state import AppState
+from app.widgets.frame_view import FrameView
+from app.workers import Job
+from gaitcore.errors import GaitInputError
+from gaitcore.io.scribbles import read_scribbles, write_scribbles
+from gaitcore.project.roto_session import (
+    RotoSession,
+    corrected,
+    export_masks,
+    preview_first_frame,
+    segmentation_key,
+    sketch_as_scribbles,
+)
+from gaitcore.project.steps import check_segmentation_input
+from gaitcore.silhouettes.annotations import Scribble
+from gaitcore.silhouettes.roto import check_scribbles
+
+SCRIBBLES_FILTER = "Scribbles (*.json)"
+
+
+class RotoController(QObject):
+    """Segment, correct, preview, export and import; see the module docstring."""
+
+    def __init__(self, state: AppState, view: FrameView, documents: DocumentController,
+                 parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self._state = state
+        self._view = view
+        self._documents = documents
+        self._session: RotoSession | None = None
+        self._running: Job | None = None
+        self._pending: list[Scribble] = []
+        self._landed = False
+        self._preview_key: tuple | None = None
+        self.previewing: Job | None = None
+        view.scribblePainted.connect(self.paint)
+        state.projectOpened.connect(self._forget)
+        state.projectChanged.connect(self._refresh_preview)
+
+    @property
+    def busy(self) -> bool:
+        """A segmentation, a correction or a masks export is running (they share the
+        engine: one at a time)."""
+        return self._running is not None
+
+    @property
+    def session(self) -> RotoSession | None:
+        """The engine of the last segmentation or correction (None before one)."""
+        return self._session
+
+    def _forget(self, *_opened) -> None:
+        self._session, self._pending, self._preview_key = None, [], None
+        self._view.set_pending(())
+        self._view.set_preview(None)
+
+    # -- segmenting -------------------------------------------------------------------------
+    def segment(self) -> Job | None:
+        """Segment the whole clip in the background; the result is an undoable command."""
+        state, project, source = self._state, self._state.project, self._state.source
+        if source is None:
+            self._documents.messageRaised.emit("open footage first")
+            return None
+        try:
+            check_segmentation_input(project)
+        except GaitInputError:
+            self._documents.asker.error(
+                "Segment clip", "Draw a box around the animal (A) on the first frame, or at "
+                "least one subject rectangle (Shift+S) and one background rectangle "
+                "(Shift+B), then segment again.")
+            return None
+        if self._running is not None:
+            return self._running
+
+        def work(progress):
+            session = RotoSession.start(source, project, progress)
+            return session, session.silhouettes()
+
+        job = Job(work, "Segmenting the clip")
+        return self._start(job, project, lambda sil: state.undo_stack.push(
+            SetSilhouettesCommand(state, sil, "segment clip")))
+
+    # -- brush corrections ------------------------------------------------------------------
+    def paint(self, scribble: Scribble) -> Job | None:
+        """A brush stroke: re-propagates the segmentation when the clip is segmented (one
+        undo step), otherwise it is kept for the next segmentation (and the first frame's
+        cut-out is shown again)."""
+        return self.add_scribbles([scribble], "paint")
+
+    def add_scribbles(self, scribbles: list[Scribble], verb: str) -> Job | None:
+        """Add brush strokes as one undo step, re-propagating when the clip is segmented."""
+        state, project, source = self._state, self._state.project, self._state.source
+        if not scribbles:
+            return None
+        labels = {sc.label for sc in scribbles}
+        what = labels.pop() if len(labels) == 1 else "brush"
+        text = f"{verb} {what} stroke" + ("s" if len(scribbles) > 1 else "")
+        sil = project.silhouettes
+        if source is None or sil is None or sil.origin != "segmented":
+            state.undo_stack.push(AddScribblesCommand(state, scribbles, text))
+            return None
+        if self._running is not None:  # one correction at a time; these go next
+            self._pending += scribbles
+            self._view.set_pending(tuple(self._pending))
+            self._documents.messageRaised.emit("re-propagating: the stroke follows when the "
+                                               "running correction ends")
+            return self._running
+        session = self._session
+
+        def work(progress):
+            done = corrected(session, source, project, scribbles, progress)
+            return done, done.silhouettes()
+
+        frames = sorted({sc.frame for sc in scribbles})
+        job = Job(work, f"Re-propagating the correction of frame {frames[0]}")
+        return self._start(job, project, lambda new: state.undo_stack.push(
+            AddScribblesCommand(state, scribbles, text, silhouettes=new)))
+
+    def _start(self, job: Job, project, push) -> Job:
+        """Run a segmentation job; its result lands only on the project it was made for."""
+        key = segmentation_key(project)
+
+        def land(result) -> None:
+            session, silhouettes = result
+            self._session, self._landed = session, True
+            if segmentation_key(self._state.project) != key:
+                self._documents.messageRaised.emit(
+                    "the project changed while segmenting: the result was dropped, try again")
+                return
+            push(silhouettes)
+
+        self._running, self._landed = job, False
+        job.finished.connect(self._finished)
+        return self._documents.run(job, land)
+
+    def _finished(self) -> None:
+        """Run the strokes painted meanwhile; after a cancel or a failure they are dropped."""
+        self._running = None
+        pending, self._pending = self._pending, []
+        self._view.set_pending(())
+        if pending and self._landed:
+            self.add_scribbles(pending, "paint")
+        elif pending:
+            self._documents.messageRaised.emit(f"{len(pending)} stroke(s) painted during the "
+                                               "correction were dropped with it")
+
+    def propagate_sketch(self) -> Job | None:
+        """The strokes sketched on the current frame, through the segmentation engine in one
+        action: they become subject brush strokes there and re-propagate (one undo step); on
+        a clip not segmented yet, sketched on the first frame, a box around them is drawn
+        with them (one undo step) and the clip is segmented."""
+        state, project, source = self._state, self._state.project, self._state.source
+        if source is None:
+            self._documents.messageRaised.emit("open footage first")
+            return None
+        try:
+            scribbles, box = sketch_as_scribbles(project.strokes_on(state.frame),
+                                                 source.shape[:2])
+        except GaitInputError as exc:
+            self._documents.messageRaised.emit(str(exc))
+            return None
+        if project.silhouettes is not None and project.silhouettes.origin == "segmented":
+            return self.add_scribbles(scribbles, "propagate sketched")
+        try:
+            check_segmentation_input(project)
+        except GaitInputError:
+            if state.frame != 0:
+                self._documents.asker.error(
+                    "Propagate the sketch", "sketch the animal on the first frame, or draw a "
+                    "box around it there (A), then propagate")
+                return None
+            project = replace(project, box=box)
+        state.undo_stack.push(ProjectCommand(state, project.with_scribbles(tuple(scribbles)),
+                                             "sketch as subject strokes", frame=state.frame))
+        return self.segment()
+
+    # -- first frame ------------------------------------------------------------------------
+    def _refresh_preview(self, project) -> None:
+        """Cut the first frame again when its inputs changed and the clip is not segmented."""
+        source = self._state.source
+        if project.silhouettes is not None or source is None:
+            return
+        key = segmentation_key(replace(project, scribbles=project.scribbles_on(0)))
+        if key == self._preview_key:
+            return
+        self._preview_key = key
+        try:
+            check_segmentation_input(project)
+        except GaitInputError:
+            self._view.set_preview(None)
+            return
+        self.preview(project)
+
+    def preview(self, project) -> Job:
+        """The first frame's cut-out from the box (or rectangles) and frame 0's strokes."""
+        source, key = self._state.source, self._preview_key
+
+        def show(mask: np.ndarray) -> None:
+            if key == self._preview_key:
+                self._view.set_preview(mask)
+
+        job = Job(lambda progress: preview_first_frame(source, project, progress),
+                  "Cutting out the first frame")
+        self.previewing = job
+        return self._documents.run(job, show)
+
+    # -- files ------------------------------------------------------------------------------
+    def export_masks(self, folder: Path | None = None) -> Job | None:
+        """Write ``masks/00000.png``... and ``segmentation.json`` into a folder, as
+        ``gaitcore segment`` does (the clip is segmented again when the session was lost)."""
+        state, project, source = self._state, self._state.project, self._state.source
+        title = "Export masks"
+        if source is None or project.silhouettes is None or project.silhouettes.origin != "segmented":
+            self._documents.asker.error(title, "segment the clip first (Tools > Segment clip); "
+                                        "nothing was exported")
+            return None
+        if self._running is not None:
+            self._documents.messageRaised.emit("wait for the segmentation to finish, then "
+                                               "export the masks")
+            return None  # the job running uses the engine
+        if folder is None:
+            base = state.path or project.footage
+            folder = self._documents.asker.export_folder(
+                title, Path(base).with_name(Path(base).stem + "_segmentation"))
+            if folder is None:
+                return None
+        session, name = self._session, str(project.footage)
+
+        def work(progress):
+            use = session if session is not None and session.restore(project) else \
+                RotoSession.start(source, project, progress)
+            return export_masks(use, folder, source_name=name, progress=progress)
+
+        job = Job(work, title)
+        self._running, self._landed = job, True  # strokes painted meanwhile go next
+        job.finished.connect(self._finished)
+        return self._documents.run(job, lambda n: self._documents.messageRaised.emit(
+            f"exported {n} masks and segmentation.json to {folder}"), tied=False)
+
+    def export_scribbles(self, path: Path | None = None) -> bool:
+        """Write the project's brush strokes as a scribbles file."""
+        project, asker = self._state.project, self._documents.asker
+        if not project.scribbles:
+            asker.error("Export scribbles", "the project has no brush strokes; nothing was "
+                        "exported")
+            return False
+        if path is None:
+            base = self._state.path or project.footage or Path.cwd() / "untitled"
+            path = asker.export_path("Export scribbles",
+                                     Path(base).with_name(Path(base).stem + "_scribbles.json"),
+                                     SCRIBBLES_FILTER)
+            if path is None:
+                return False
+        try:
+            write_scribbles(path, project.scribbles)
+        except OSError as exc:
+            asker.error("Export scribbles", f"cannot write {path}: {exc.strerror or exc}")
+            return False
+        self._documents.messageRaised.emit(f"exported {len(project.scribbles)} strokes to {path}")
+        return True
+
+    def import_scribbles(self, path: Path | None = None) -> Job | None:
+        """Add the strokes of a scribbles file (one undo step; a bad file changes nothing)."""
+        state, asker = self._state, self._documents.asker
+        if state.source is None:
+            asker.error("Import scribbles", "open the footage the strokes were painted on first")
+            return None
+        if path is None:
+            path = asker.open_file("Import scribbles", SCRIBBLES_FILTER)
+            if path is None:
+                return None
+        try:
+            scribbles = read_scribbles(path, n_frames=state.n_frames)
+            check_scribbles(scribbles, state.n_frames, state.source.shape[:2])
+        except GaitInputError as exc:
+            asker.error("Import scribbles", f"{exc}; nothing was imported")
+            return None
+        if not scribbles:
+            self._documents.messageRaised.emit(f"{path} holds no strokes")
+            return None
+        return self.add_scribbles(scribbles, "import")

@@ -1,0 +1,114 @@
+"""One brush correction in the app: from the stroke to its undo step, over a 100-frame clip.
+
+The window (offscreen Qt) opens a 100-frame clip, segments it from a box, then a background
+brush stroke is painted on frame 50 (``RotoController.paint``, what releasing the mouse
+does); the figure is the wall time until the correction (strokes and silhouettes) is on the
+undo stack, job, crops and the window's update included. Baseline in the same run: the whole
+clip segmented in the same window. Clips: the demo canter (320x240, rendered) and, where the
+real footage is present, the first 100 frames of Muybridge's race horse video (960x540).
+Target (issue #11): at most 5 s.
+
+Run ``python -m benchmarks roto_app``.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
+if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+    os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+
+from benchmarks import Section
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+TARGET_S = 5.0
+FRAMES = 100
+
+
+def run() -> list[Section]:
+    """All sections of this benchmark."""
+    from PySide6.QtWidgets import QApplication
+
+    from app.demo import ensure_demo_clip
+
+    QApplication.instance() or QApplication([])
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        canter = ensure_demo_clip(Path(tmp) / "canter") / "images"
+        rows.append(_measure("demo canter, 320x240", canter, (1, 36, 295, 184),
+                             [(232, 52), (250, 62), (268, 72), (284, 84)]))
+        video = DATA / "muybridge-race-horse" / "race_horse_loop.mp4"
+        if video.exists():
+            folder = _first_frames(video, Path(tmp) / "horse")
+            rows.append(_measure("Muybridge race horse, 960x540", folder, (110, 30, 760, 420),
+                                 [(10, 528), (250, 528), (480, 528)]))
+    headers = ["clip (100 frames)", "segment from the box (s)", "one correction on frame 50 (s)",
+               "frames re-propagated", "correction / segmentation"]
+    notes = [f"target: one correction re-propagated over a 100-frame clip in <= {TARGET_S:g} s",
+             "wall time from the brush stroke to the undo step on the stack (job, engine, crops "
+             "rebuilt, window updated); offscreen Qt, one run each"]
+    return [Section("A brush correction in the app (issue #11)", headers, rows, notes)]
+
+
+def _first_frames(video: Path, folder: Path) -> Path:
+    """The first :data:`FRAMES` frames of ``video`` as PNG files."""
+    import cv2
+
+    folder.mkdir(parents=True)
+    cap = cv2.VideoCapture(str(video))
+    for t in range(FRAMES):
+        ok, frame = cap.read()
+        if not ok:
+            break
+        cv2.imwrite(str(folder / f"{t:05d}.png"), frame)
+    cap.release()
+    return folder
+
+
+def _measure(name: str, folder: Path, box: tuple, stroke: list) -> list:
+    from dataclasses import replace
+
+    from app.main_window import MainWindow
+    from gaitcore.silhouettes.annotations import Rect, Scribble
+
+    window = MainWindow(remember_layout=False)
+    window.show()
+    try:
+        window.open_path(folder)
+        _wait(lambda: window.frame_view.shown_frame == 0)
+        window.state.set_project(replace(window.state.project, box=Rect(*box)))
+        _wait(lambda: not window.runner.busy)
+        t0 = time.perf_counter()
+        window.tools.segment()
+        _wait(lambda: window.state.project.silhouettes is not None)
+        segment_s = time.perf_counter() - t0
+        _wait(lambda: not window.runner.busy)
+        steps = window.state.undo_stack.count()
+        window.state.set_frame(50)
+        t0 = time.perf_counter()
+        window.tools.roto.paint(Scribble(stroke, 14, 50, "background"))
+        _wait(lambda: window.state.undo_stack.count() > steps)
+        correct_s = time.perf_counter() - t0
+        first, stop = window.tools.roto._session.changed
+        _wait(lambda: not window.runner.busy)
+    finally:
+        window.state.undo_stack.setClean()
+        window.close()
+    return [name, round(segment_s, 2), round(correct_s, 2), stop - first,
+            f"{correct_s / segment_s:.2f}"]
+
+
+def _wait(condition, timeout_s: float = 600.0) -> None:
+    from PySide6.QtCore import QCoreApplication, QThread
+
+    end = time.monotonic() + timeout_s
+    while not condition():
+        if time.monotonic() > end:
+            raise TimeoutError("the window did not finish in time")
+        QCoreApplication.processEvents()
+        QThread.msleep(5)

@@ -1,0 +1,342 @@
+"""The segmentation engine of a project, kept alive between corrections (the Roto Brush model).
+
+:func:`gaitcore.project.steps.segment` segments a clip and forgets how; an artist who paints a
+correction on frame 57 wants only the frames around 57 cut again. A :class:`RotoSession`
+keeps the :class:`~gaitcore.silhouettes.roto.RotoSegmentation` of the last run and every
+frame's tight crop, so that a correction re-propagates only up to the neighbouring corrected
+frames and rebuilds the project's :class:`~gaitcore.project.document.Silhouettes` from the
+crops it already has.
+
+Undo puts back an older project; the session then no longer matches it. It keeps copies of
+its last few states, one per set of inputs (box, rectangles, brush strokes), and goes back to
+the one matching the project; when none does, the next correction segments the clip again
+from the project's inputs, so a correction is always right for the project it is made on.
+Qt-free: the app runs these methods in its jobs, a script can call them directly.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections import OrderedDict
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from gaitcore.errors import GaitInputError
+from gaitcore.footage.sources import FrameSource
+from gaitcore.io.scribbles import write_segmentation_json
+from gaitcore.progress import Progress, report
+from gaitcore.project.document import Project, Silhouettes
+from gaitcore.project.steps import check_segmentation_input
+from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
+from gaitcore.silhouettes.roto import FrameState, RotoSegmentation
+from gaitcore.silhouettes.segmentation import SegmentationSettings, roto_frame
+from gaitcore.silhouettes.sketch import rasterize_strokes
+from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiAccumulator
+
+MAX_SAVED_STATES = 4
+"""States kept for undo: each is a copy of the engine (bit-packed masks at the working size,
+about 4 MB per thousand frames of a 960x540 clip) and shares the crops of the frames a
+correction did not change."""
+ROI_MARGIN = 0.05
+"""Border of the ROI windows, as :func:`gaitcore.silhouettes.segmentation.segment_clip`."""
+
+
+def segmentation_key(project: Project) -> tuple:
+    """What the segmentation of ``project`` depends on: footage, box, rectangles and brush
+    strokes in painting order (two projects with equal keys segment alike)."""
+    return (project.footage, project.box, project.subject_rects, project.background_rects,
+            tuple(_scribble_key(sc) for sc in project.scribbles))
+
+
+def _scribble_key(sc: Scribble) -> tuple:
+    return sc.frame, sc.label, sc.width_px, sc.points_xy.tobytes()
+
+
+@dataclass
+class _EngineState:
+    """The engine, every frame's crop for the ROI windows, and every frame's state."""
+
+    engine: RotoSegmentation
+    crops: RoiAccumulator
+    states: list[FrameState]
+    key: tuple
+
+    def copied(self, source) -> _EngineState:
+        """A copy: the engine deep-copied but for the footage (frames are decoded again,
+        never copied), the crops shared until replaced (:meth:`RoiAccumulator.copy`)."""
+        engine = copy.deepcopy(self.engine, memo={id(source): source})
+        return _EngineState(engine, self.crops.copy(), list(self.states), self.key)
+
+
+class RotoSession:
+    """The segmentation of one project's clip, kept for corrections; see the module docstring.
+
+    Make one with :meth:`start`; the app keeps it for the project it was made on.
+
+    Attributes
+    ----------
+    source : FrameSource
+        The footage segmented (the whole clip; frame numbers are source frame numbers).
+    changed : tuple of (int, int)
+        Frames ``first <= t < stop`` the last :meth:`start` or :meth:`correct` changed.
+    """
+
+    def __init__(self, source: FrameSource, state: _EngineState) -> None:
+        self.source = source
+        self._state: _EngineState | None = state
+        self._saved: OrderedDict[tuple, _EngineState] = OrderedDict()
+        self.changed = (0, state.engine.n)
+        self._save()
+
+    @classmethod
+    def start(cls, source: FrameSource, project: Project,
+              progress: Progress | None = None) -> RotoSession:
+        """Segment the whole clip from the project's box (or rectangles) and brush strokes.
+
+        The silhouettes are those of :func:`gaitcore.project.steps.segment` (and of
+        ``gaitcore segment`` with the same inputs).
+
+        Raises
+        ------
+        GaitInputError
+            Nothing to start from (no box, rectangles or subject stroke on frame 0), bad
+            input, or no subject found in any frame.
+        Cancelled
+            When ``progress`` returned False.
+        """
+        check_segmentation_input(project)
+        rects = ((), ()) if project.box else (project.subject_rects, project.background_rects)
+        engine = RotoSegmentation(source, box=project.box, subject_rects=rects[0],
+                                  background_rects=rects[1], scribbles=project.scribbles,
+                                  settings=SegmentationSettings().propagation)
+        engine.run(progress)
+        crops, states = RoiAccumulator(), []
+        for t in range(engine.n):
+            found, st = roto_frame(engine, t)
+            if found is None:
+                crops.add_lost()
+            else:
+                crops.add(*found)
+            states.append(st)
+        return cls(source, _EngineState(engine, crops, states, segmentation_key(project)))
+
+    # -- reading ----------------------------------------------------------------------------
+    @property
+    def n_frames(self) -> int:
+        return len(self.source)
+
+    def matches(self, project: Project) -> bool:
+        """True when the session holds (or kept) the segmentation of ``project``'s inputs."""
+        key = segmentation_key(project)
+        return (self._state is not None and self._state.key == key) or key in self._saved
+
+    def silhouettes(self) -> Silhouettes:
+        """The project's silhouettes from the crops of every frame (cheap: no frame is decoded
+        or cut again).
+
+        Raises
+        ------
+        GaitInputError
+            The subject is lost in every frame.
+        """
+        return Silhouettes(self._current().crops.finish(margin=ROI_MARGIN, max_side=WORK_SIDE_PX),
+                           "segmented")
+
+    def states(self) -> tuple[FrameState, ...]:
+        """Lost, corrected and confidence of every frame."""
+        return tuple(self._current().states)
+
+    def mask(self, t: int) -> np.ndarray:
+        """Frame ``t``'s full-frame mask as the command writes it, (rows, cols) uint8 0/255:
+        zeros where the subject is lost."""
+        found, _ = roto_frame(self._current().engine, t)
+        out = np.zeros(self.source.shape[:2], np.uint8)
+        if found is not None:
+            crop, (x, y, w, h), _ = found
+            out[y : y + h, x : x + w] = crop * np.uint8(255)
+        return out
+
+    # -- corrections ------------------------------------------------------------------------
+    def restore(self, project: Project) -> bool:
+        """Go back to the state matching ``project`` (after an undo or a redo); False when
+        the session kept none (segment again with :meth:`start`)."""
+        key = segmentation_key(project)
+        if self._state is not None and self._state.key == key:
+            return True
+        saved = self._saved.get(key)
+        if saved is None:
+            return False
+        self._state = saved.copied(self.source)
+        self._saved.move_to_end(key)
+        return True
+
+    def correct(self, project: Project, scribbles: Sequence[Scribble],
+                progress: Progress | None = None) -> None:
+        """Add brush strokes to ``project``'s segmentation and re-propagate only where they
+        matter: the stroked frames are cut again with the strokes as hard labels, and the
+        change travels both ways up to the neighbouring corrected frames.
+
+        Parameters
+        ----------
+        project : Project
+            The project the strokes are painted on (without them); the session must
+            :meth:`matches` it.
+        scribbles : sequence of Scribble
+        progress : callable(done, total) -> bool, optional
+
+        Raises
+        ------
+        GaitInputError
+            The session does not match ``project``, or a stroke outside the clip or frame.
+        Cancelled
+            When ``progress`` returned False (the session goes back to ``project``'s state).
+        """
+        if not self.restore(project):
+            raise GaitInputError("the segmentation no longer matches the project: segment the "
+                                 "clip again")
+        state = self._current()
+        try:
+            first, stop = state.engine.correct(list(scribbles), progress)
+            for t in range(first, stop):
+                found, state.states[t] = roto_frame(state.engine, t)
+                state.crops.replace(t, found)
+        except BaseException:
+            self._state = None  # half corrected: the saved copy of ``project`` is the truth
+            raise
+        state.key = segmentation_key(project.with_scribbles(tuple(scribbles)))
+        self.changed = (first, stop)
+        self._save()
+
+    def _current(self) -> _EngineState:
+        if self._state is None:
+            raise GaitInputError("the segmentation was interrupted: segment the clip again")
+        return self._state
+
+    def _save(self) -> None:
+        """Keep a copy of the current state for undo (an engine that cannot be copied is
+        simply segmented again after an undo)."""
+        state = self._current()
+        try:
+            self._saved[state.key] = state.copied(self.source)
+        except (TypeError, copy.Error):
+            return
+        self._saved.move_to_end(state.key)
+        while len(self._saved) > MAX_SAVED_STATES:
+            self._saved.popitem(last=False)
+
+
+def corrected(session: RotoSession | None, source: FrameSource, project: Project,
+              scribbles: Sequence[Scribble], progress: Progress | None = None) -> RotoSession:
+    """``project``'s segmentation corrected by brush strokes ``scribbles``.
+
+    Re-propagates with ``session`` when it holds (or kept) the segmentation of ``project``;
+    otherwise segments the whole clip from the project's inputs and the new strokes.
+
+    Returns
+    -------
+    RotoSession
+        ``session`` itself or a new one; :meth:`RotoSession.silhouettes` gives the result.
+    """
+    if session is not None and session.source is source and session.restore(project):
+        session.correct(project, scribbles, progress)
+        return session
+    return RotoSession.start(source, project.with_scribbles(tuple(scribbles)), progress)
+
+
+def preview_first_frame(source: FrameSource, project: Project,
+                        progress: Progress | None = None) -> np.ndarray:
+    """The first frame's cut-out from the project's box (or rectangles) and the brush
+    strokes of frame 0, as the whole clip's segmentation will cut it, before it runs.
+
+    Only the first frames the first cut looks at are read (it compares frame 0 with a few
+    later ones to see what moves).
+
+    Returns
+    -------
+    ndarray of shape (rows, cols), bool
+
+    Raises
+    ------
+    GaitInputError
+        Nothing to start from, or bad input.
+    """
+    check_segmentation_input(project)
+    settings = SegmentationSettings().propagation
+    n = min(len(source), 1 + max((*settings.motion_offsets, 0)))
+    frames = [source.frame(t) for t in range(n)]
+    report(progress, 1, 2, "first-frame cut-out cancelled")
+    rects = ((), ()) if project.box else (project.subject_rects, project.background_rects)
+    engine = RotoSegmentation(frames, box=project.box, subject_rects=rects[0],
+                              background_rects=rects[1], scribbles=project.scribbles_on(0),
+                              settings=settings)
+    engine.run()
+    report(progress, 2, 2, "first-frame cut-out cancelled")
+    return engine.mask(0)
+
+
+def sketch_as_scribbles(strokes: Sequence[Stroke], shape: tuple[int, int], *,
+                        pad: float = 0.04) -> tuple[list[Scribble], Rect]:
+    """Sketch strokes as subject brush strokes for the segmentation engine, and a box around
+    them grown by ``pad`` of its size on each side (the scripted user's box).
+
+    The sketched pixels become sure subject on their frame; with the box on the first frame,
+    the engine cuts the animal there and carries it across the clip in one run, instead of a
+    sketch per frame (paper Section 2.2's fallback).
+
+    Parameters
+    ----------
+    strokes : sequence of Stroke
+        Strokes of one frame.
+    shape : (rows, cols)
+        The frame's size.
+
+    Raises
+    ------
+    GaitInputError
+        No stroke, or the strokes lie outside the frame.
+    """
+    if not strokes:
+        raise GaitInputError("sketch the animal on this frame first (D), then propagate")
+    x, y, w, h = cv2.boundingRect(rasterize_strokes(strokes, shape))
+    if w == 0:
+        raise GaitInputError("the strokes lie outside the frame: sketch over the animal")
+    dx, dy = round(pad * w) + 1, round(pad * h) + 1
+    box = Rect(x - dx, y - dy, w + 2 * dx, h + 2 * dy).clipped_to(shape[1], shape[0])
+    return [Scribble(s.points_xy, s.width_px, s.frame, "subject") for s in strokes], box
+
+
+def export_masks(session: RotoSession, out_dir: Path, *, source_name: str = "",
+                 progress: Progress | None = None) -> int:
+    """Write ``out_dir/masks/00000.png``... (full frame, 0/255, one per source frame) and
+    ``out_dir/segmentation.json``, as ``gaitcore segment`` does.
+
+    Returns
+    -------
+    int
+        The number of masks written.
+
+    Raises
+    ------
+    GaitInputError
+        The folder cannot be written.
+    Cancelled
+        When ``progress`` returned False.
+    """
+    folder = Path(out_dir) / "masks"
+    n = session.n_frames
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        for t in range(n):
+            if not cv2.imwrite(str(folder / f"{t:05d}.png"), session.mask(t)):
+                raise OSError(f"cannot write {folder / f'{t:05d}.png'}")
+            report(progress, t + 1, n, "mask export cancelled")
+        write_segmentation_json(Path(out_dir) / "segmentation.json", session.states(),
+                                source=source_name)
+    except OSError as exc:
+        raise GaitInputError(f"cannot export the masks to {out_dir}: {exc}; choose a folder "
+                             "you can write to") from None
+    return n

@@ -1,0 +1,116 @@
+"""The project's segmentation kept alive between corrections, undone and redone."""
+
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from gaitcore.bench.scripted_user import padded_box
+from gaitcore.footage.sources import open_frames
+from gaitcore.progress import Cancelled
+from gaitcore.project.document import Project
+from gaitcore.project.roto_session import RotoSession, corrected, export_masks
+from gaitcore.project.steps import segment
+from gaitcore.project.storage import load_project, save_project
+from gaitcore.silhouettes.annotations import Scribble
+from tests.gaitcore.test_segmentation import scene
+
+N = 16
+WRONG = Scribble([[30.0, 50.0], [70.0, 50.0]], 6, 9, "background")  # across the body
+
+
+@pytest.fixture(scope="module")
+def clip(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("scene") / "images"
+    folder.mkdir()
+    frames, truth = scene(N)
+    for t, img in enumerate(frames):
+        cv2.imwrite(str(folder / f"{t:05d}.png"), img)
+    return folder, truth
+
+
+def _project(clip, scribbles=()):
+    folder, truth = clip
+    return Project(footage=folder, box=padded_box(truth[0]), scribbles=tuple(scribbles))
+
+
+def test_session_segments_as_the_project_step(clip):
+    project = _project(clip, [Scribble([[40.0, 52.0]], 4, 5, "subject")])
+    with open_frames(clip[0]) as source:
+        assert RotoSession.start(source, project).silhouettes() == segment(source, project)
+
+
+def test_a_correction_changes_only_its_range_and_undo_finds_the_older_state(clip):
+    project = _project(clip)
+    with open_frames(clip[0]) as source:
+        session = RotoSession.start(source, project)
+        before = session.silhouettes()
+        after_project = project.with_scribbles((WRONG,))
+        assert corrected(session, source, project, [WRONG]) is session
+        first, stop = session.changed
+        assert first <= WRONG.frame < stop
+        after = session.silhouettes()
+        assert not np.array_equal(after.roi.crops[WRONG.frame], before.roi.crops[WRONG.frame])
+        assert session.states()[WRONG.frame].corrected
+        assert session.matches(after_project) and session.matches(project)
+        # Undo: the project without the stroke; a stroke on another frame is then made on
+        # the state before the first one, never on top of it.
+        other = Scribble([[80.0, 20.0]], 4, 13, "background")
+        session.correct(project, [other])
+        again = session.silhouettes()
+        fresh = RotoSession.start(source, project.with_scribbles((other,))).silhouettes()
+        assert again == fresh
+        assert not session.states()[WRONG.frame].corrected
+
+
+def test_cancelled_correction_leaves_the_session_usable(clip):
+    project = _project(clip)
+    with open_frames(clip[0]) as source:
+        session = RotoSession.start(source, project)
+        before = session.silhouettes()
+        with pytest.raises(Cancelled):
+            session.correct(project, [WRONG], lambda done, total: False)
+        assert session.restore(project) and session.silhouettes() == before
+
+
+def test_without_a_session_a_correction_segments_again(clip):
+    project = _project(clip)
+    with open_frames(clip[0]) as source:
+        session = corrected(None, source, project, [WRONG])
+        assert session.silhouettes() == segment(source, project.with_scribbles((WRONG,)))
+
+
+def test_export_masks_as_the_command_writes_them(clip, tmp_path):
+    project = _project(clip, [WRONG])
+    with open_frames(clip[0]) as source:
+        session = RotoSession.start(source, project)
+        assert export_masks(session, tmp_path, source_name="scene") == N
+    masks = sorted((tmp_path / "masks").glob("*.png"))
+    assert [m.name for m in masks] == [f"{t:05d}.png" for t in range(N)]
+    first = cv2.imread(str(masks[0]), cv2.IMREAD_UNCHANGED)
+    assert first.shape == clip[1][0].shape and set(np.unique(first)) <= {0, 255}
+    data = json.loads((tmp_path / "segmentation.json").read_text())
+    assert data["n_frames"] == N and data["frames"][WRONG.frame]["corrected"]
+
+
+def test_scribbles_are_saved_with_the_project(clip, tmp_path):
+    project = _project(clip, [WRONG, Scribble([[40.0, 52.0], [45, 60]], 4.5, 5, "subject")])
+    save_project(project, tmp_path / "p.gaitproj")
+    loaded = load_project(tmp_path / "p.gaitproj")
+    assert loaded.scribbles == project.scribbles and loaded.corrected_frames() == (5, 9)
+
+
+def test_old_project_files_open_without_scribbles(clip, tmp_path):
+    path = tmp_path / "old.gaitproj"
+    save_project(_project(clip), path)
+    doc = json.loads(path.read_text())
+    del doc["scribbles"]
+    path.write_text(json.dumps(doc))
+    assert load_project(path).scribbles == ()
+    doc["scribbles"] = [{"frame": 1, "label": "sky", "width_px": 3, "points_xy": [[1, 2]]}]
+    path.write_text(json.dumps(doc))
+    with pytest.raises(Exception, match=r"scribbles\[0\]\.label"):
+        load_project(path)
