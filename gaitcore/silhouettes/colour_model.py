@@ -276,6 +276,13 @@ def learn_colours(image: np.ndarray, mask: np.ndarray) -> ColourTable | None:
     return ColourTable(np.clip(llr, -8, 8).astype(np.float32), 6)
 
 
+COLOUR_NOISE_VAR = 4.0
+"""Variance added to every mixture component, (BGR levels)^2: a camera's noise (about two
+levels). Without it a component of one flat colour (a rendered or blown-out sky) is so narrow
+that the few pixels of it a first cut takes outweigh the whole background, and the subject
+floods into it."""
+
+
 def _mixture_loglik(model: np.ndarray, x: np.ndarray) -> np.ndarray:
     """Log density of ``cv2.grabCut``'s mixture (weights 5, means 5x3, covariances 5x9) at
     points ``x`` (m, 3)."""
@@ -283,7 +290,7 @@ def _mixture_loglik(model: np.ndarray, x: np.ndarray) -> np.ndarray:
     weights, means, covs = m[:5], m[5:20].reshape(5, 3), m[20:65].reshape(5, 3, 3)
     terms = np.full((5, x.shape[0]), -np.inf)
     for k in np.nonzero(weights > 0)[0]:
-        cov = covs[k] + np.eye(3) * 1e-3
+        cov = covs[k] + np.eye(3) * COLOUR_NOISE_VAR
         d = x - means[k]
         q = np.einsum("ni,ij,nj->n", d, np.linalg.inv(cov), d)
         terms[k] = np.log(weights[k]) - 0.5 * np.log(np.linalg.det(cov)) - 0.5 * q

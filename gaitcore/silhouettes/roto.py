@@ -123,6 +123,11 @@ class RotoSegmentation:
                 raise GaitInputError("no background rectangle given: draw at least one on the "
                                      "first frame, or a box around the subject instead")
         self.box = None if box is None else box.clipped_to(cols, rows)
+        if self.box is not None and self.box.area == rows * cols and not any(
+                sc.frame == 0 and sc.label == "background" for sc in scribbles):
+            raise GaitInputError("the box covers the whole frame, so nothing shows what the "
+                                 "background looks like: draw it around the animal, or paint "
+                                 "a background stroke on the first frame")
         self.subject_rects = [r.clipped_to(cols, rows) for r in subject_rects]
         self.background_rects = [r.clipped_to(cols, rows) for r in background_rects]
         check_scribbles(scribbles, self.n, (rows, cols))
