@@ -276,11 +276,11 @@ def learn_colours(image: np.ndarray, mask: np.ndarray) -> ColourTable | None:
     return ColourTable(np.clip(llr, -8, 8).astype(np.float32), 6)
 
 
-COLOUR_NOISE_VAR = 4.0
-"""Variance added to every mixture component, (BGR levels)^2: a camera's noise (about two
-levels). Without it a component of one flat colour (a rendered or blown-out sky) is so narrow
-that the few pixels of it a first cut takes outweigh the whole background, and the subject
-floods into it."""
+COLOUR_NOISE_VAR = 1.0
+"""Variance added to every mixture component, (BGR levels)^2: one 8-bit level of noise.
+Without it a component of one flat colour (a rendered or blown-out sky) is so narrow that the
+few pixels of it a first cut takes outweigh the whole background, and the subject floods into
+it."""
 
 
 def _mixture_loglik(model: np.ndarray, x: np.ndarray) -> np.ndarray:

@@ -38,6 +38,9 @@ from gaitcore.silhouettes.sketch import rasterize_strokes
 from gaitcore.silhouettes.tracking import keep_overlapping
 
 _CHUNK = 64  # frames decoded at once for a backward pass
+FILLED_BOX = 0.95
+"""A first cut covering more of its box than this separated nothing (an animal's silhouette
+leaves gaps in its box: between the legs, above the back)."""
 
 
 @dataclass(frozen=True)
@@ -123,11 +126,6 @@ class RotoSegmentation:
                 raise GaitInputError("no background rectangle given: draw at least one on the "
                                      "first frame, or a box around the subject instead")
         self.box = None if box is None else box.clipped_to(cols, rows)
-        if self.box is not None and self.box.area == rows * cols and not any(
-                sc.frame == 0 and sc.label == "background" for sc in scribbles):
-            raise GaitInputError("the box covers the whole frame, so nothing shows what the "
-                                 "background looks like: draw it around the animal, or paint "
-                                 "a background stroke on the first frame")
         self.subject_rects = [r.clipped_to(cols, rows) for r in subject_rects]
         self.background_rects = [r.clipped_to(cols, rows) for r in background_rects]
         check_scribbles(scribbles, self.n, (rows, cols))
@@ -158,6 +156,7 @@ class RotoSegmentation:
         done = [0]
         total = self.n + sum(b - a for a, b in zip(key_frames, key_frames[1:]))
         self.keys[0] = self._first_cut()
+        self._check_first_cut(self.keys[0].mask)
         self.key_area = max(1.0, float(self.keys[0].mask.sum()))
         done[0] = 1
         report(progress, 1, total, "segmentation cancelled")
@@ -248,6 +247,19 @@ class RotoSegmentation:
         finally:
             fine, self.work = self.work, work
         return Cut(work.shrink_mask(fine.enlarge(mask)).astype(np.uint8), 1.0)
+
+    def _check_first_cut(self, mask: np.ndarray) -> None:
+        """Refuse a first cut that fills its box: nothing in or around the box looked like
+        background (a box over the whole frame, or one the animal's colours fill)."""
+        if self.box is None:
+            return
+        x, y, w, h = self.work.box(self.box.as_tuple())
+        inside = mask[y : y + h, x : x + w]
+        if inside.size and inside.mean() > FILLED_BOX:
+            raise GaitInputError(
+                "the cut-out on the first frame fills the whole box, so nothing told the "
+                "animal from the background: draw the box closer around the animal, or paint "
+                "background strokes on the first frame")
 
     def _first_cut_here(self, frame: np.ndarray) -> np.ndarray:
         small = self.work.shrink(frame)

@@ -143,7 +143,7 @@ def test_segment_command_writes_masks_and_states(tmp_path, capsys):
 
 @pytest.mark.parametrize(("args", "scribbles", "match"), [
     (["--box", "500,500,10,10"], "", "outside"),
-    (["--box", "0,0,128,96"], "", "covers the whole frame"),
+    (["--box", "0,0,128,96"], "", "fills the whole box"),
     (["--box", "10,10,0,5"], "", "empty"),
     (["--scribbles", "SCRIBBLES"], '{"scribbles": [{"frame": 40, "label": "subject", '
      '"points": [[40, 50]]}]}', "frame 40"),
@@ -226,3 +226,5 @@ def test_a_loose_box_on_a_flat_background_does_not_flood():
     seg.run()
     assert max(seg.mask(t).sum() / truth[t].sum() for t in range(16)) < 1.25
     assert np.mean([iou(seg.mask(t), truth[t]) for t in range(16)]) > 0.9
+    with pytest.raises(GaitInputError, match="fills the whole box"):
+        RotoSegmentation(list(frames), box=Rect(0, 0, 320, 239)).run()  # no sky left outside
