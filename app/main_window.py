@@ -183,28 +183,7 @@ class MainWindow(QMainWindow):
 
     def _build_menus(self) -> None:
         bar = self.menuBar()
-        file = bar.addMenu("&File")
-        self._action(file, "&Open project or video...", QKeySequence.StandardKey.Open, self.open_dialog)
-        self._action(file, "Open image or &mask folder...", "Ctrl+Shift+O", self.open_folder_dialog)
-        self._action(file, "Open &batch summary...", None, self.open_batch_dialog)
-        self.recent_menu = file.addMenu("Open &recent")
-        self._fill_recent(self.documents.recent_files())
-        file.addSeparator()
-        self._action(file, "&Save", QKeySequence.StandardKey.Save, self.documents.save)
-        self._action(file, "Save &as...", QKeySequence.StandardKey.SaveAs, self.documents.save_as)
-        file.addSeparator()
-        export = file.addMenu("&Export")
-        self.export_actions = {
-            suffix: self._action(export, f"{label}...", None, lambda s=suffix: self.exporter.export(s))
-            for suffix, label in KINDS.items()
-        }
-        export.addSeparator()
-        roto = self.tools.roto
-        self._action(export, "Masks and segmentation.json...", None, roto.export_masks)
-        self._action(export, "Scribbles (brush strokes)...", None, roto.export_scribbles)
-        self._action(file, "&Import scribbles...", None, roto.import_scribbles)
-        file.addSeparator()
-        self._action(file, "&Quit", QKeySequence.StandardKey.Quit, self.close)
+        self._build_file_menu(bar.addMenu("&File"))
 
         edit = bar.addMenu("&Edit")
         undo = self.state.undo_stack.createUndoAction(self, "&Undo")
@@ -244,6 +223,29 @@ class MainWindow(QMainWindow):
         for dock in self.docks.values():
             view.addAction(dock.toggleViewAction())
         view.addAction(self.tools.toolbar.toggleViewAction())
+
+    def _build_file_menu(self, file: QMenu) -> None:
+        self._action(file, "&Open project or video...", QKeySequence.StandardKey.Open, self.open_dialog)
+        self._action(file, "Open image or &mask folder...", "Ctrl+Shift+O", self.open_folder_dialog)
+        self._action(file, "Open &batch summary...", None, self.open_batch_dialog)
+        self.recent_menu = file.addMenu("Open &recent")
+        self._fill_recent(self.documents.recent_files())
+        file.addSeparator()
+        self._action(file, "&Save", QKeySequence.StandardKey.Save, self.documents.save)
+        self._action(file, "Save &as...", QKeySequence.StandardKey.SaveAs, self.documents.save_as)
+        file.addSeparator()
+        export = file.addMenu("&Export")
+        self.export_actions = {
+            suffix: self._action(export, f"{label}...", None, lambda s=suffix: self.exporter.export(s))
+            for suffix, label in KINDS.items()
+        }
+        export.addSeparator()
+        roto = self.tools.roto
+        self._action(export, "Masks and segmentation.json...", None, roto.export_masks)
+        self._action(export, "Scribbles (brush strokes)...", None, roto.export_scribbles)
+        self._action(file, "&Import scribbles...", None, roto.import_scribbles)
+        file.addSeparator()
+        self._action(file, "&Quit", QKeySequence.StandardKey.Quit, self.close)
 
     def _build_pose_menu(self, pose: QMenu) -> None:
         posing = self.posing
