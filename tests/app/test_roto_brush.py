@@ -8,11 +8,11 @@ import cv2
 import numpy as np
 import pytest
 
-from app.commands import AddStrokesCommand
+from app.commands import AddStrokesCommand, SetBoxCommand
 from app.widgets.frame_canvas import Tool
 from app.widgets.timeline import CORRECTED_COLOUR
 from gaitcore.project.roto_session import RotoSession
-from gaitcore.silhouettes.annotations import Scribble, Stroke
+from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
 from tests.app.conftest import wait_ready
 from tests.app.test_main_window import choose_tool, drag
 
@@ -260,3 +260,18 @@ def test_a_sketch_on_one_frame_propagates_with_the_engine_in_one_action(qtbot, w
         mask = session.mask(t) > 0
         scores.append((mask & truth).sum() / (mask | truth).sum())
     assert min(scores) > 0.8, np.round(scores, 2)
+
+
+
+def test_a_box_over_the_whole_frame_says_why_and_keeps_the_box(qtbot, window, canter_clip,
+                                                               asker):
+    """The canvas cannot draw it (its corners are pixel centres), a project file can hold it."""
+    window.open_path(canter_clip / "images")
+    wait_ready(qtbot, window)
+    window.state.undo_stack.push(SetBoxCommand(window.state, Rect(0, 0, 320, 240)))
+    qtbot.waitUntil(lambda: bool(asker.errors), timeout=20_000)
+    assert len(asker.errors) == 1 and "fills the whole box" in asker.errors[0]
+    assert window.state.project.box == Rect(0, 0, 320, 240) and window.frame_view.preview is None
+    window.tools.segment()
+    qtbot.waitUntil(lambda: len(asker.errors) == 2, timeout=60_000)
+    assert "fills the whole box" in asker.errors[1] and window.state.project.silhouettes is None
