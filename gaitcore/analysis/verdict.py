@@ -21,6 +21,11 @@ set a little lower so that a genuine 1.5-cycle clip is not rejected.
 PERIODICITY_ALPHA = 0.01
 """PC1 must hold a rhythm at this significance (Fisher's g test) for a clip to be usable."""
 
+FEW_CYCLES = 3.0
+HINT_ALPHA = 0.1
+"""A rhythm with p between PERIODICITY_ALPHA and HINT_ALPHA on a clip of fewer than
+FEW_CYCLES cycles is too short to judge, rather than absent: the text asks for a longer clip."""
+
 QUIET_CORRELATION = 0.3
 """In the paper's good clips r3..r5 stay at or below this; higher values earn a note."""
 
@@ -59,6 +64,14 @@ def explain(
             f"frames) repeats only {cycles:.1f} times in this {n}-frame clip, and at least "
             "1.5 cycles are needed. Use a longer clip of a steady gait; if the animal drifts "
             "(walks towards the camera, the camera pans), cut a part where it stays side-on."
+        )
+    if PERIODICITY_ALPHA < p_value <= HINT_ALPHA and cycles < FEW_CYCLES:
+        return Verdict.NOT_USABLE, (
+            f"No rhythm found: PC1's strongest rhythm (period about {period:.0f} frames) "
+            f"repeats only {cycles:.1f} times in this {n}-frame clip, too few for the test to "
+            f"tell it from chance (Fisher's test p = {p_value:.2g}; {PERIODICITY_ALPHA:g} "
+            f"needed). Use a longer clip of the same gait: at least {FEW_CYCLES:g} cycles "
+            f"(about {FEW_CYCLES * period:.0f} frames)."
         )
     if p_value > PERIODICITY_ALPHA:
         return Verdict.NOT_USABLE, (

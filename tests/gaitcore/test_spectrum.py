@@ -301,3 +301,17 @@ def test_diagnose_never_crashes_on_finite_input(x):
     assert 0.0 <= diag.band[0] <= diag.f0 <= diag.band[1]
     assert diag.filtered.shape == x.shape and np.all(np.isfinite(diag.filtered))
     assert isinstance(diag.verdict, Verdict) and diag.reason
+
+
+def test_a_rhythm_too_short_to_judge_asks_for_a_longer_clip():
+    """Two cycles of a noisy rhythm: Fisher's test cannot be sure (p above 0.01), and the
+    sentence says the clip is too short rather than that the silhouettes hold no rhythm."""
+    from gaitcore.analysis.verdict import explain
+
+    verdict, text = explain(np.array([0.9, 0.8, 0.2, 0.1, 0.1]), 1 / 10, (0.08, 0.12), 20,
+                            0.6, False, 0.02)
+    assert verdict is Verdict.NOT_USABLE
+    assert "repeats only 2.0 times in this 20-frame clip" in text and "at least 3 cycles" in text
+    _, noise = explain(np.array([0.3, 0.2, 0.2, 0.1, 0.1]), 1 / 10, (0.08, 0.12), 20, 0.6,
+                       False, 0.4)
+    assert "no stronger than chance" in noise
