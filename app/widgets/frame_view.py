@@ -227,22 +227,22 @@ class FrameView(QWidget):
         rect = QRectF(*box)
         self._window.setRect(rect)
         if self.show_silhouette:
-            crop = _smooth_upscale(sil.roi.crops[frame], box[2], box[3])
-            rgba = np.zeros(crop.shape + (4,), np.uint8)
-            rgba[crop] = TINT_RGBA
-            self._tint.setImage(rgba, autoLevels=False, levels=(0, 255))
-            self._tint.setRect(rect)
+            self._show_tint(_smooth_upscale(sil.roi.crops[frame], box[2], box[3]), rect)
 
     def _draw_preview(self, frame: int, unsegmented: bool) -> None:
         """The first frame's cut-out (before the clip is segmented), full frame."""
         mask = self._preview
         if mask is None or frame != 0 or not unsegmented or not self.show_silhouette:
             return
+        self._show_tint(mask, QRectF(0, 0, mask.shape[1], mask.shape[0]))
+        self._tint.setVisible(True)
+
+    def _show_tint(self, mask: np.ndarray, rect: QRectF) -> None:
+        """Tint ``mask`` (rows, cols) bool, laid over ``rect`` of the frame."""
         rgba = np.zeros(mask.shape + (4,), np.uint8)
         rgba[mask] = TINT_RGBA
         self._tint.setImage(rgba, autoLevels=False, levels=(0, 255))
-        self._tint.setRect(QRectF(0, 0, mask.shape[1], mask.shape[0]))
-        self._tint.setVisible(True)
+        self._tint.setRect(rect)
 
     # -- drawing --------------------------------------------------------------------------
     def _clear_live(self) -> None:

@@ -33,7 +33,12 @@ from gaitcore.project.document import Project, Silhouettes
 from gaitcore.project.steps import check_segmentation_input
 from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
 from gaitcore.silhouettes.roto import FrameState, RotoSegmentation
-from gaitcore.silhouettes.segmentation import SegmentationSettings, roto_frame
+from gaitcore.silhouettes.segmentation import (
+    SegmentationSettings,
+    collect_roto,
+    full_frame_mask,
+    roto_frame,
+)
 from gaitcore.silhouettes.sketch import rasterize_strokes
 from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiAccumulator
 
@@ -108,21 +113,12 @@ class RotoSession:
         Cancelled
             When ``progress`` returned False.
         """
-        check_segmentation_input(project)
-        rects = ((), ()) if project.box else (project.subject_rects, project.background_rects)
-        engine = RotoSegmentation(source, box=project.box, subject_rects=rects[0],
-                                  background_rects=rects[1], scribbles=project.scribbles,
-                                  settings=SegmentationSettings().propagation)
+        engine = _engine(source, project, project.scribbles)
         engine.run(progress)
-        crops, states = RoiAccumulator(), []
-        for t in range(engine.n):
-            found, st = roto_frame(engine, t)
-            if found is None:
-                crops.add_lost()
-            else:
-                crops.add(*found)
-            states.append(st)
-        return cls(source, _EngineState(engine, crops, states, segmentation_key(project)))
+        states: dict[int, FrameState] = {}
+        crops = collect_roto(engine, None, states.__setitem__)
+        return cls(source, _EngineState(engine, crops, [states[t] for t in range(engine.n)],
+                                        segmentation_key(project)))
 
     # -- reading ----------------------------------------------------------------------------
     @property
@@ -154,11 +150,7 @@ class RotoSession:
         """Frame ``t``'s full-frame mask as the command writes it, (rows, cols) uint8 0/255:
         zeros where the subject is lost."""
         found, _ = roto_frame(self._current().engine, t)
-        out = np.zeros(self.source.shape[:2], np.uint8)
-        if found is not None:
-            crop, (x, y, w, h), _ = found
-            out[y : y + h, x : x + w] = crop * np.uint8(255)
-        return out
+        return full_frame_mask(found, self.source.shape[:2])
 
     # -- corrections ------------------------------------------------------------------------
     def restore(self, project: Project) -> bool:
@@ -265,17 +257,29 @@ def preview_first_frame(source: FrameSource, project: Project,
         Nothing to start from, or bad input.
     """
     check_segmentation_input(project)
-    settings = SegmentationSettings().propagation
-    n = min(len(source), 1 + max((*settings.motion_offsets, 0)))
+    offsets = SegmentationSettings().propagation.motion_offsets
+    n = min(len(source), 1 + max((*offsets, 0)))
     frames = [source.frame(t) for t in range(n)]
     report(progress, 1, 2, "first-frame cut-out cancelled")
-    rects = ((), ()) if project.box else (project.subject_rects, project.background_rects)
-    engine = RotoSegmentation(frames, box=project.box, subject_rects=rects[0],
-                              background_rects=rects[1], scribbles=project.scribbles_on(0),
-                              settings=settings)
+    engine = _engine(frames, project, project.scribbles_on(0))
     engine.run()
     report(progress, 2, 2, "first-frame cut-out cancelled")
     return engine.mask(0)
+
+
+def _engine(frames, project: Project, scribbles: Sequence[Scribble]) -> RotoSegmentation:
+    """The segmentation engine of ``project``'s box (or rectangles) and ``scribbles``.
+
+    Raises
+    ------
+    GaitInputError
+        Nothing to start from (no box, rectangles or subject stroke on frame 0), bad input.
+    """
+    check_segmentation_input(project)
+    rects = ((), ()) if project.box else (project.subject_rects, project.background_rects)
+    return RotoSegmentation(frames, box=project.box, subject_rects=rects[0],
+                            background_rects=rects[1], scribbles=scribbles,
+                            settings=SegmentationSettings().propagation)
 
 
 def sketch_as_scribbles(strokes: Sequence[Stroke], shape: tuple[int, int], *,

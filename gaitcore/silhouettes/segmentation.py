@@ -182,7 +182,7 @@ def segment_clip(
                                subject_rects=subject_rects, background_rects=background_rects,
                                scribbles=scribbles, settings=s.propagation)
         seg.run(progress)
-        acc = _collect_roto(seg, mask_sink, state_sink)
+        acc = collect_roto(seg, mask_sink, state_sink)
     return acc.finish(margin=margin, max_side=max_side)
 
 
@@ -200,15 +200,14 @@ def _segment_gmm(source, subject_rects, background_rects, s: SegmentationSetting
     return acc
 
 
-def _collect_roto(seg: RotoSegmentation, mask_sink: MaskSink | None,
-                  state_sink: Callable[[int, FrameState], None] | None) -> RoiAccumulator:
+def collect_roto(seg: RotoSegmentation, mask_sink: MaskSink | None,
+                 state_sink: Callable[[int, FrameState], None] | None) -> RoiAccumulator:
     """Every frame's mask of a finished propagation, all its components (legs may come
     apart), into the ROI accumulator and the sinks."""
     acc = RoiAccumulator()
-    shape = seg.mask(0).shape
     for t in range(seg.n):
         found, state = roto_frame(seg, t)
-        _collect(acc, found, shape, t, mask_sink)
+        _collect(acc, found, seg.work.shape, t, mask_sink)
         if state_sink is not None:
             state_sink(t, state)
     return acc
@@ -249,8 +248,15 @@ def _collect(acc: RoiAccumulator, found, shape: tuple[int, int], t: int,
     else:
         acc.add(*found)
     if mask_sink is not None:
-        out = np.zeros(shape, np.uint8)
-        if found is not None:
-            crop, (x, y, w, h), _ = found
-            out[y : y + h, x : x + w] = crop * np.uint8(255)
-        mask_sink(t, out)
+        mask_sink(t, full_frame_mask(found, shape))
+
+
+def full_frame_mask(found: tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+                    shape: tuple[int, int]) -> np.ndarray:
+    """A frame's mask as the masks folder holds it, (rows, cols) uint8 0/255, from its
+    ``(crop, box, center_xy)`` (None: lost, all zeros)."""
+    out = np.zeros(shape, np.uint8)
+    if found is not None:
+        crop, (x, y, w, h), _ = found
+        out[y : y + h, x : x + w] = crop * np.uint8(255)
+    return out

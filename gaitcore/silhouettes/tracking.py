@@ -142,9 +142,9 @@ class RoiAccumulator:
 
     def add(self, crop: np.ndarray, box: np.ndarray, center_xy: np.ndarray) -> None:
         """Append one frame: ``crop`` (h, w) bool at ``box`` (x, y, w, h), its centre (x, y)."""
-        crop = np.asarray(crop, dtype=bool)
-        self._items.append((np.packbits(crop, axis=None), crop.shape, np.asarray(box, int)))
-        self._centers.append(np.asarray(center_xy, dtype=float))
+        self._items.append(None)
+        self._centers.append(np.full(2, np.nan))
+        self.replace(len(self) - 1, (crop, box, center_xy))
 
     def add_lost(self) -> None:
         """Append a frame where the subject was not found."""

@@ -30,6 +30,14 @@ def true_poses(skeleton, n_frames: int = 100) -> np.ndarray:
     return generate_gait(skeleton, DEMO_GAIT, n_frames)
 
 
+def pose_keys_truly(window) -> None:
+    """Give every key-image the pose the demo clip was rendered with (one undo step each)."""
+    truth = true_poses(window.state.skeleton)
+    for k in window.state.analysis.key_frames:
+        window.state.set_frame(k)
+        window.posing.set_pose(truth[k], "set pose")
+
+
 def pose_with_spin_boxes(window, frame: int, pose: np.ndarray, channels=None) -> np.ndarray:
     """Go to ``frame`` and type ``pose`` (every channel, or ``channels``) into the panel.
 

@@ -11,7 +11,7 @@ from PySide6.QtCore import QPoint, Qt
 from PySide6.QtGui import QImage
 
 from tests.app.conftest import wait_jobs
-from tests.app.posing_helpers import open_demo, true_poses
+from tests.app.posing_helpers import open_demo, pose_keys_truly, true_poses
 
 pytestmark = pytest.mark.gl
 from app.widgets.skeleton_gl import BACKGROUND_RGB as BACKGROUND  # noqa: E402
@@ -110,10 +110,7 @@ def test_click_a_joint_to_select_it_and_drag_to_rotate_it(qtbot, window, posed_k
 
 
 def test_animation_preview_over_the_footage(qtbot, window, posed_key, artifacts_dir):
-    truth = true_poses(window.state.skeleton)
-    for k in window.state.analysis.key_frames:
-        window.state.set_frame(k)
-        window.posing.set_pose(truth[k], "set pose")
+    pose_keys_truly(window)
     qtbot.waitUntil(lambda: window.animator.animation is not None)
     window.state.set_frame(40)
     qtbot.waitUntil(lambda: window.frame_view.shown_frame == 40 and window.viewport._image[0] == 40)

@@ -15,7 +15,7 @@ from gaitcore.io.analysis_file import write_analysis_json
 from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.pose_table import PoseTable, read_pose_table, write_pose_table
 from gaitcore.project.document import AnimationOptions
-from tests.app.posing_helpers import open_demo, pose_with_spin_boxes, true_poses
+from tests.app.posing_helpers import open_demo, pose_keys_truly, pose_with_spin_boxes, true_poses
 
 ARTIFACTS = Path(__file__).resolve().parents[1] / "_artifacts"
 
@@ -87,10 +87,7 @@ def test_pose_every_key_with_spin_boxes_then_export_equals_gaitcore_animate(
 def test_filtered_and_clamped_options_match_the_command_line_too(qtbot, window, asker, canter_clip,
                                                                  tmp_path):
     open_demo(qtbot, window, canter_clip)
-    truth = true_poses(window.state.skeleton)
-    for k in window.state.analysis.key_frames:
-        window.state.set_frame(k)
-        window.posing.set_pose(truth[k], "set pose")
+    pose_keys_truly(window)
     window.animation_view.filtered.setChecked(True)
     window.animation_view.clamp.setChecked(True)
     app_csv = export_from_app(qtbot, window, asker, tmp_path / "app.csv")
@@ -197,10 +194,7 @@ def test_walk_alternates_are_posed_as_mirrors_and_drive_switching(qtbot, window,
 def test_export_options_are_asked_saved_and_undoable(qtbot, window, asker, canter_clip,
                                                        tmp_path):
     open_demo(qtbot, window, canter_clip)
-    truth = true_poses(window.state.skeleton)
-    for k in window.state.analysis.key_frames:
-        window.state.set_frame(k)
-        window.posing.set_pose(truth[k], "set pose")
+    pose_keys_truly(window)
     chosen = replace(window.animator.options, root_motion="in-place", ground_contact=False,
                      bone_names="rigify")
     asker.export_answer = chosen
@@ -255,10 +249,7 @@ def test_exporting_before_every_key_is_posed_says_which_are_missing(qtbot, windo
 def test_export_a_preview_video_off_the_gui_thread(qtbot, window, asker, canter_clip, tmp_path,
                                                   artifacts_dir):
     open_demo(qtbot, window, canter_clip)
-    truth = true_poses(window.state.skeleton)
-    for k in window.state.analysis.key_frames:
-        window.state.set_frame(k)
-        window.posing.set_pose(truth[k], "set pose")
+    pose_keys_truly(window)
     window.animation_view.loop.setChecked(True)  # one cycle: a shorter video
     asker.next_export_path = tmp_path / "preview.mp4"
     job = window.exporter.export(".mp4")
