@@ -94,8 +94,9 @@ def cut_first(small: np.ndarray, box: Box | None, *, residual: np.ndarray | None
         The subject's box (working size): everything outside is background.
     residual : ndarray of shape (rows, cols), optional
         From :func:`motion_residual`: inside the box, pixels that move unlike the camera
-        start as "probably subject", the others as "probably background" (kept only when
-        the result spans the box; otherwise the whole box starts as "probably subject").
+        start as "probably subject", the others as "probably background", and where the box
+        lies on the frame's edge the cut keeps to their box grown by a tenth; kept only when
+        the result spans that box, otherwise the whole box starts as "probably subject".
     seed : ndarray of shape (rows, cols), bool, optional
         Instead of ``residual``: the pixels of the box that start as "probably subject"
         (e.g. the paper's colour model's guess), under the same check.
@@ -109,14 +110,17 @@ def cut_first(small: np.ndarray, box: Box | None, *, residual: np.ndarray | None
         0/1 mask: the components touching the sure subject (or the largest one).
     """
     moving = None if seed is None or box is None or not seed.any() else seed
+    around = box
     if box is not None and residual is not None and moving is None:
         x, y, w, h = box
         inside = np.zeros(small.shape[:2], bool)
         inside[y : y + h, x : x + w] = True
         moving = _moving(residual, inside)
+        if moving is not None:
+            around = _in_from_edges(box, moving)
     if moving is not None:
-        mask = _cut_labels(small, box, moving, subject, background, settings)
-        if _spans(mask, box):
+        mask = _cut_labels(small, around, moving, subject, background, settings)
+        if _spans(mask, around):
             return mask
     return _cut_labels(small, box, None, subject, background, settings)
 
@@ -153,6 +157,31 @@ def _cut_labels(small: np.ndarray, box: Box | None, moving: np.ndarray | None,
             return mask
         anchor = comp == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     return keep_overlapping(mask, anchor, least=TOUCHING)
+
+
+def grown_box(mask: np.ndarray, within: Box) -> Box:
+    """The bounding box of a subject's first guess grown by a tenth (and 2 pixels) each way,
+    clipped to ``within``."""
+    x, y, w, h = cv2.boundingRect(mask.astype(np.uint8))
+    pad_x, pad_y = round(0.1 * w) + 2, round(0.1 * h) + 2
+    x0, y0 = max(within[0], x - pad_x), max(within[1], y - pad_y)
+    x1 = min(within[0] + within[2], x + w + pad_x)
+    y1 = min(within[1] + within[3], y + h + pad_y)
+    return x0, y0, x1 - x0, y1 - y0
+
+
+def _in_from_edges(box: Box, moving: np.ndarray) -> Box:
+    """The box's sides that lie on the frame's edge, moved in to the moving pixels' box grown
+    by a tenth: beyond such a side there is no background for the colour model to learn from
+    (a box drawn past the frame), so the background left inside it would be taken."""
+    rows, cols = moving.shape
+    x, y, w, h = box
+    gx, gy, gw, gh = grown_box(moving, box)
+    x0 = gx if x == 0 else x
+    y0 = gy if y == 0 else y
+    x1 = gx + gw if x + w >= cols else x + w
+    y1 = gy + gh if y + h >= rows else y + h
+    return x0, y0, x1 - x0, y1 - y0
 
 
 def _spans(mask: np.ndarray, box: Box, least: float = 0.6) -> bool:

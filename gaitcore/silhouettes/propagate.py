@@ -7,7 +7,8 @@ is brought to about ``subject_side_px`` pixels, enough to keep thin legs while s
   Kroeger et al. 2016), not shifted: each pixel looks up where it was in the previous frame.
 - It is then decided (:func:`fuse_cut`) from the colour models learnt on the key frame the mask
   came from (kept, so they cannot drift) and the warped mask as a soft prior, smoothed along
-  the image's edges: the mask follows legs and snaps to edges.
+  the image's edges: the mask follows legs and snaps to edges. Parts of it that drift away
+  from the body (background the flow carried along) are dropped.
 - A result whose area jumps away from the warped mask's (a flood into the ground, or a
   collapse) is refused: the warped mask is kept and the frame marked as not confident. When
   the warped pixels stop looking like the subject it is lost, and searched for again in the
@@ -66,6 +67,12 @@ class PropagationSettings:
         Frames after the first whose motion seeds the first cut (empty: colour only).
     first_scale : float
         Frame 0 is cut at this many times the working size (then shrunk to it).
+    part_gap_frac : float
+        On a propagated frame, a part of the mask farther than this fraction of the subject's
+        side from its largest part is dropped. A leg split off by a shadow line lies within a
+        few pixels of the body; a part further away is background the flow carried along (a
+        fence post the first cut took beside the tail), and left alone it grows frame after
+        frame.
     stroke_reach : float
         Around a stroke, a band this many times its width takes the stroke's side in the
         prior of the corrected frame's cut (the strokes themselves are sure labels).
@@ -90,6 +97,7 @@ class PropagationSettings:
     smooth_frac: float = 0.02
     first_scale: float = 1.5
     stroke_reach: float = 2.0
+    part_gap_frac: float = 0.04
 
     def __post_init__(self) -> None:
         if self.flow_preset not in _PRESETS:
@@ -290,6 +298,7 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, colours: ColourTable,
     evidence = cv2.ximgproc.guidedFilter(np.ascontiguousarray(small), evidence,
                                          max(1, round(settings.smooth_frac * side)), 4.0)
     mask = keep_overlapping((evidence > 0).astype(np.uint8), inside, least=TOUCHING)
+    mask = _near_body(mask, max(1, round(settings.part_gap_frac * side)))
     area, prior_area = float(mask.sum()), float(inside.sum())
     if area < settings.max_shrink * prior_area and np.median(evidence[inside > 0]) < 0:
         return Cut(np.zeros_like(inside), 0.0)  # nothing there looks like the subject: gone
@@ -297,6 +306,18 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, colours: ColourTable,
         return Cut(inside, 0.0)
     agree = float((mask & inside).sum()) / max(float((mask | inside).sum()), 1.0)
     return Cut(mask, agree)
+
+
+def _near_body(mask: np.ndarray, gap: int) -> np.ndarray:
+    """The largest component of a 0/1 mask and the others within ``gap`` pixels of it."""
+    n, comp, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    if n <= 2:
+        return mask
+    body = (comp == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))).astype(np.uint8)
+    near = np.zeros(n, bool)
+    near[comp[cv2.dilate(body, disk(gap)) > 0]] = True
+    near[0] = False
+    return near[comp].astype(np.uint8)
 
 
 def find_again(small: np.ndarray, colours: ColourTable, area: float,

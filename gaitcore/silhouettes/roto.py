@@ -23,7 +23,12 @@ from gaitcore.errors import GaitInputError
 from gaitcore.progress import Progress, report
 from gaitcore.silhouettes.annotations import Rect, Scribble
 from gaitcore.silhouettes.colour_model import ColourModel, check_frame, learn_colours, rect_mask
-from gaitcore.silhouettes.keyframe import cut_first, cut_with_prior, motion_residual
+from gaitcore.silhouettes.keyframe import (
+    cut_first,
+    cut_with_prior,
+    grown_box,
+    motion_residual,
+)
 from gaitcore.silhouettes.propagate import (
     TOUCHING,
     Cut,
@@ -295,11 +300,7 @@ class RotoSegmentation:
         guess = keep_overlapping(cv2.morphologyEx(guess.astype(np.uint8), cv2.MORPH_OPEN,
                                                   np.ones((3, 3), np.uint8)) | fg, fg,
                                  least=TOUCHING)
-        x, y, w, h = cv2.boundingRect(guess)
-        pad_x, pad_y = round(0.1 * w) + 2, round(0.1 * h) + 2
-        x0, y0 = max(0, x - pad_x), max(0, y - pad_y)
-        return (x0, y0, min(small.shape[1], x + w + pad_x) - x0,
-                min(small.shape[0], y + h + pad_y) - y0), guess > 0
+        return grown_box(guess, (0, 0, small.shape[1], small.shape[0])), guess > 0
 
     def _key_cut(self, t: int, prior: np.ndarray) -> Cut:
         """Cut a corrected frame: its strokes are sure labels, and the prior around them takes
