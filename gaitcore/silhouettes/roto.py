@@ -61,7 +61,8 @@ class FrameState:
         The frame carries the artist's strokes.
     confidence : float
         In [0, 1]: how well the graph cut agreed with the mask carried by optical flow (1 on
-        key frames, 0 where a cut was refused as a flood or a collapse).
+        key frames, 0 where a cut was refused as a flood or a collapse); where both passes
+        reach a frame, theirs weighted as their masks are blended.
     """
 
     lost: bool
