@@ -161,7 +161,7 @@ class RotoSegmentation:
         self.fwd, self.bwd = _PackedMasks(self.fwd.shape), _PackedMasks(self.bwd.shape)
         key_frames = sorted({0} | set(self.corrected_frames))
         done = [0]
-        total = self.n + sum(b - a + 1 for a, b in zip(key_frames, key_frames[1:]))
+        total = self.n + sum(b - a for a, b in zip(key_frames, key_frames[1:]))
         self.keys[0] = self._first_cut()
         self._check_first_cut(self.keys[0].mask)
         self.key_area = max(1.0, float(self.keys[0].mask.sum()))
@@ -194,8 +194,9 @@ class RotoSegmentation:
             nxt = min([f for f in keys if f > k], default=self.n)
             current = self.keys[k].mask if k in self.keys else self._final(k)
             self.keys[k] = self._key_cut(k, current.astype(np.float32))
-            done, total = [0], min(nxt + 1, self.n) - (k if prev is None else prev)
-            self._forward(k, min(nxt + 1, self.n), progress, done, total)
+            stop = min(nxt + 1, self.n)  # onto the next key: how far the pass drifted
+            done, total = [0], stop - 1 - (k if prev is None else prev)
+            self._forward(k, stop, progress, done, total)
             if prev is not None:
                 self._backward(k, prev, progress, done, total)
             lo, hi = min(lo, k if prev is None else prev + 1), max(hi, nxt)
