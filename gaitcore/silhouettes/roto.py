@@ -3,9 +3,12 @@
 The first frame is cut from the artist's box (or the paper's rectangles); every frame that
 carries strokes is a *key frame*, cut again with its strokes as hard labels. Masks travel from
 each key frame forward, and backward, by optical flow and a graph cut
-(:mod:`gaitcore.silhouettes.propagate`), up to the next key frame; where both directions reach
-a frame, their masks are blended, weighted by how near each key is. A correction changes only
-the frames between its neighbouring key frames.
+(:mod:`gaitcore.silhouettes.propagate`), up to and onto the next key frame. Where both
+directions reach a frame their masks are blended, each weighted by its expected error there:
+its distance from its key times how far it drifted by the other key (one minus the IoU of its
+mask there and the key's), so a pass that swelled or shrank on the way hands the frames over
+to the other, and two passes that drifted alike are weighted by nearness. A correction
+changes only the frames between its neighbouring key frames.
 
 Only working-size masks are kept (bit-packed around the subject), so a 10,000-frame clip costs
 tens of megabytes; frames are decoded again when a backward pass needs them.
@@ -42,6 +45,9 @@ from gaitcore.silhouettes.propagate import (
 from gaitcore.silhouettes.sketch import rasterize_strokes
 from gaitcore.silhouettes.tracking import keep_overlapping
 
+_DRIFT_FLOOR = 0.02
+"""Least drift a pass is taken to have at the other key: a pass that lands on it exactly still
+differs from it by a pixel along the outline."""
 _CHUNK = 64  # frames decoded at once for a backward pass
 FILLED_BOX = 0.95
 """A first cut covering more of its box than this separated nothing (an animal's silhouette
@@ -60,7 +66,8 @@ class FrameState:
         The frame carries the artist's strokes.
     confidence : float
         In [0, 1]: how well the graph cut agreed with the mask carried by optical flow (1 on
-        key frames, 0 where a cut was refused as a flood or a collapse).
+        key frames, 0 where a cut was refused as a flood or a collapse); where both passes
+        reach a frame, theirs weighted as their masks are blended.
     """
 
     lost: bool
@@ -192,8 +199,9 @@ class RotoSegmentation:
             nxt = min([f for f in keys if f > k], default=self.n)
             current = self.keys[k].mask if k in self.keys else self._final(k)
             self.keys[k] = self._key_cut(k, current.astype(np.float32))
-            done, total = [0], nxt - (k if prev is None else prev)
-            self._forward(k, nxt, progress, done, total)
+            stop = min(nxt + 1, self.n)  # onto the next key: how far the pass drifted
+            done, total = [0], stop - 1 - (k if prev is None else prev)
+            self._forward(k, stop, progress, done, total)
             if prev is not None:
                 self._backward(k, prev, progress, done, total)
             lo, hi = min(lo, k if prev is None else prev + 1), max(hi, nxt)
@@ -209,9 +217,10 @@ class RotoSegmentation:
         if t in self.keys:
             area, conf = float(self.keys[t].mask.sum()), 1.0
         else:
-            _, b = self._neighbours(t)
-            cuts = [c for c in (self.fwd.get(t), self.bwd.get(t) if b < self.n else None) if c]
-            conf = float(np.mean([c.confidence for c in cuts])) if cuts else 0.0
+            a, b = self._neighbours(t)
+            f, g = self.fwd.get(t), self.bwd.get(t) if b < self.n else None
+            w = 1.0 if g is None else 0.0 if f is None else self._weight(t, a, b)
+            conf = (w * f.confidence if f else 0.0) + ((1 - w) * g.confidence if g else 0.0)
             area = float(self._final(t).sum())
         return FrameState(area < self.s.lost_frac * self.key_area, corrected, round(conf, 3))
 
@@ -340,11 +349,12 @@ class RotoSegmentation:
                     progress, done, total)
 
     def _backward(self, key: int, stop: int, progress, done, total) -> None:
-        """From key frame ``key`` down to ``stop`` (excluded), decoding in chunks."""
+        """From key frame ``key`` down to key frame ``stop`` (included: where the pass meets
+        that key tells how far it drifted), decoding in chunks."""
         def reversed_frames() -> Iterator[tuple[int, np.ndarray]]:
             hi = key + 1
-            while hi > stop + 1:
-                lo = max(stop + 1, hi - _CHUNK)
+            while hi > stop:
+                lo = max(stop, hi - _CHUNK)
                 chunk = list(self._frames(lo, hi))
                 yield from reversed(chunk)
                 hi = lo
@@ -400,16 +410,33 @@ class RotoSegmentation:
         a, b = self._neighbours(t)
         return self._blend(t, a, b).astype(np.uint8)
 
+    def _weight(self, t: int, a: int, b: int) -> float:
+        """The forward pass's share of frame ``t`` (``a < t < b``), in (0, 1).
+
+        Each pass's error is taken to grow in proportion to its distance from its key, at the
+        rate measured where it reaches the other key: one minus the IoU of its mask there and
+        that key's (at least ``_DRIFT_FLOOR``). The share is the other pass's error over the
+        sum, nearness alone when both drifted alike.
+        """
+        ef, eg = self._drift(self.fwd, b), self._drift(self.bwd, a)
+        return eg * (b - t) / (eg * (b - t) + ef * (t - a))
+
+    def _drift(self, store: _PackedMasks, key: int) -> float:
+        """One minus the IoU of a pass's mask on key frame ``key`` and the key's own."""
+        end, mine = store.get(key), self.keys[key].mask > 0
+        if end is None:
+            return 1.0
+        union = float((mine | (end.mask > 0)).sum())
+        return max(_DRIFT_FLOOR, 1.0 - float((mine & (end.mask > 0)).sum()) / max(union, 1.0))
+
     def _blend(self, t: int, a: int, b: int, *, key_frames_only: bool = False) -> np.ndarray:
         """Forward mask from key ``a`` and backward mask from key ``b`` at frame ``t``, mixed
-        by nearness (a probability in [0, 1] thresholded at one half)."""
+        by :meth:`_weight` (a probability in [0, 1] thresholded at one half)."""
         f = self.fwd.get(t)
         g = None if key_frames_only or b >= self.n else self.bwd.get(t)
-        if f is None and g is None:
-            return np.zeros(self.fwd.shape, np.uint8)
         if f is None or g is None:
-            return (f or g).mask
-        w = (b - t) / max(b - a, 1)
+            return np.zeros(self.fwd.shape, np.uint8) if f is None and g is None else (f or g).mask
+        w = self._weight(t, a, b)
         soft = (w * cv2.GaussianBlur(f.mask.astype(np.float32), (0, 0), 1.5)
                 + (1 - w) * cv2.GaussianBlur(g.mask.astype(np.float32), (0, 0), 1.5))
         return (soft > 0.5).astype(np.uint8)
