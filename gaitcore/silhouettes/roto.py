@@ -10,8 +10,9 @@ mask there and the key's), so a pass that swelled or shrank on the way hands the
 to the other, and two passes that drifted alike are weighted by nearness. A correction
 changes only the frames between its neighbouring key frames.
 
-Only working-size masks are kept (bit-packed around the subject), so a 10,000-frame clip costs
-tens of megabytes; frames are decoded again when a backward pass needs them.
+Only working-size masks are kept, bit-packed around the subject
+(:class:`~gaitcore.silhouettes.packed_masks.PackedMasks`), so a 10,000-frame clip costs tens
+of megabytes; frames are decoded again when a backward pass needs them.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from gaitcore.silhouettes.keyframe import (
     grown_box,
     motion_residual,
 )
+from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import (
     TOUCHING,
     Cut,
@@ -73,28 +75,6 @@ class FrameState:
     lost: bool
     corrected: bool
     confidence: float
-
-
-class _PackedMasks:
-    """Working-size 0/1 masks by frame, stored as packed bits of their bounding box."""
-
-    def __init__(self, shape: tuple[int, int]) -> None:
-        self.shape = shape
-        self._items: dict[int, tuple[np.ndarray, int, int, int, int, float]] = {}
-
-    def put(self, t: int, cut: Cut) -> None:
-        x, y, w, h = cv2.boundingRect(cut.mask)
-        bits = np.packbits(cut.mask[y : y + h, x : x + w] > 0, axis=None)
-        self._items[t] = (bits, x, y, w, h, cut.confidence)
-
-    def get(self, t: int) -> Cut | None:
-        item = self._items.get(t)
-        if item is None:
-            return None
-        bits, x, y, w, h, conf = item
-        mask = np.zeros(self.shape, np.uint8)
-        mask[y : y + h, x : x + w] = np.unpackbits(bits, count=w * h).reshape(h, w)
-        return Cut(mask, conf)
 
 
 class RotoSegmentation:
@@ -144,8 +124,8 @@ class RotoSegmentation:
         self.scribbles: tuple[Scribble, ...] = tuple(scribbles)
         side = self._subject_side()
         self.work = WorkingSize.for_subject((rows, cols), side, self.s)
-        self.fwd = _PackedMasks(self.work.wh[::-1])
-        self.bwd = _PackedMasks(self.work.wh[::-1])
+        self.fwd = PackedMasks(self.work.wh[::-1])
+        self.bwd = PackedMasks(self.work.wh[::-1])
         self.keys: dict[int, Cut] = {}
         self.key_area = 1.0
 
@@ -163,7 +143,7 @@ class RotoSegmentation:
             When ``progress`` returned False.
         """
         self.keys.clear()
-        self.fwd, self.bwd = _PackedMasks(self.fwd.shape), _PackedMasks(self.bwd.shape)
+        self.fwd, self.bwd = PackedMasks(self.fwd.shape), PackedMasks(self.bwd.shape)
         key_frames = sorted({0} | set(self.corrected_frames))
         done = [0]
         total = self.n + sum(b - a for a, b in zip(key_frames, key_frames[1:]))
@@ -360,7 +340,7 @@ class RotoSegmentation:
                 hi = lo
         self._carry(self.keys[key].mask, key, reversed_frames(), self.bwd, progress, done, total)
 
-    def _carry(self, mask: np.ndarray, key: int, frames, store: _PackedMasks,
+    def _carry(self, mask: np.ndarray, key: int, frames, store: PackedMasks,
                progress, done, total) -> None:
         flow_of = make_flow(self.s)
         grey_prev = models = None
@@ -421,7 +401,7 @@ class RotoSegmentation:
         ef, eg = self._drift(self.fwd, b), self._drift(self.bwd, a)
         return eg * (b - t) / (eg * (b - t) + ef * (t - a))
 
-    def _drift(self, store: _PackedMasks, key: int) -> float:
+    def _drift(self, store: PackedMasks, key: int) -> float:
         """One minus the IoU of a pass's mask on key frame ``key`` and the key's own."""
         end, mine = store.get(key), self.keys[key].mask > 0
         if end is None:
