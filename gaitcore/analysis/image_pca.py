@@ -83,9 +83,8 @@ class ImagePCA:
 
         Notes
         -----
-        Paper equations (1)-(5). The eigenvectors come from the SVD of the centred data
-        matrix I (n x d) through the n x n Gram matrix I I^T when n < d, so the d x d
-        covariance is never formed. Clips larger than ``DENSE_LIMIT`` values (long clips) use
+        Paper equations (1)-(5). The eigenvectors come from the smaller of the n x n Gram
+        matrix I I^T and the d x d covariance I^T I of the centred data matrix I (n x d). Clips larger than ``DENSE_LIMIT`` values (long clips) use
         a randomized SVD streaming the frames in chunks, so memory does not grow with n x d.
         """
         arr = np.asarray(images)
@@ -99,28 +98,17 @@ class ImagePCA:
         n = x.shape[0]
         mean = x.mean(axis=0)
         x -= mean
-        if x.shape[0] <= x.shape[1]:
-            gram = x @ x.T
-            evals, u = np.linalg.eigh(gram)
-            order = np.argsort(evals)[::-1]
-            evals, u = evals[order], u[:, order]
-            evals = np.maximum(evals, 0.0)
-            keep = evals > _EIG_EPS * max(evals[0], np.finfo(float).tiny)
-            if not keep.any() or evals[0] <= 0:
-                raise GaitInputError(_IDENTICAL)
-            c = min(n_components, int(keep.sum()))
-            sing = np.sqrt(evals[:c])
-            comps = (u[:, :c].T @ x) / sing[:, None]
-            total = float(evals.sum()) / n
-        else:
-            _, sing_all, vt = np.linalg.svd(x, full_matrices=False)
-            if sing_all[0] <= 0 or not np.any(sing_all > 0):
-                raise GaitInputError(_IDENTICAL)
-            keep = sing_all**2 > _EIG_EPS * sing_all[0] ** 2
-            c = min(n_components, int(keep.sum()))
-            sing = sing_all[:c]
-            comps = vt[:c]
-            total = float((sing_all**2).sum()) / n
+        frames_side = x.shape[0] <= x.shape[1]
+        evals, vecs = np.linalg.eigh(x @ x.T if frames_side else x.T @ x)
+        order = np.argsort(evals)[::-1]
+        evals, vecs = np.maximum(evals[order], 0.0), vecs[:, order]
+        keep = evals > _EIG_EPS * max(evals[0], np.finfo(float).tiny)
+        if not keep.any() or evals[0] <= 0:
+            raise GaitInputError(_IDENTICAL)
+        c = min(n_components, int(keep.sum()))
+        sing = np.sqrt(evals[:c])
+        comps = (vecs[:, :c].T @ x) / sing[:, None] if frames_side else vecs[:, :c].T
+        total = float(evals.sum()) / n
         report(progress, 1, 1, _CANCELLED)
         return cls._finish(arr.shape, mean, comps, sing, total, x @ comps.T)
 

@@ -39,14 +39,16 @@ def test_matches_covariance_eigendecomposition():
     np.testing.assert_allclose(pca.variance_ratio.sum(), evals.sum() / np.trace(cov), rtol=1e-9)
 
 
-def test_tall_data_uses_svd_and_agrees_with_gram_route():
+def test_tall_data_uses_the_covariance_and_agrees_with_the_svd():
     rng = np.random.default_rng(2)
-    wide = rng.random((30, 3, 3))  # n=30 > d=9: SVD route
-    pca = ImagePCA.fit(wide, n_components=3)
-    x = wide.reshape(30, -1)
-    xc = x - x.mean(0)
-    evals = np.linalg.eigvalsh(xc.T @ xc / 30)[::-1][:3]
-    np.testing.assert_allclose(pca.eigenvalues, evals, rtol=1e-9)
+    tall = rng.random((30, 3, 3))  # n=30 > d=9: the 9 x 9 covariance route
+    pca = ImagePCA.fit(tall, n_components=3)
+    xc = tall.reshape(30, -1) - tall.reshape(30, -1).mean(0)
+    _, sing, vt = np.linalg.svd(xc, full_matrices=False)
+    np.testing.assert_allclose(pca.eigenvalues, sing[:3] ** 2 / 30, rtol=1e-9)
+    scores = xc @ vt[:3].T / sing[:3] * np.sqrt(30)
+    signs = np.sign((pca.projections * scores).sum(0))
+    np.testing.assert_allclose(pca.projections * signs, scores, atol=1e-9)
 
 
 def test_project_new_frames_equals_fitted_projections():
