@@ -32,8 +32,7 @@ from gaitcore.project.roto_session import (
     sketch_as_scribbles,
 )
 from gaitcore.project.steps import check_segmentation_input
-from gaitcore.silhouettes.annotations import Scribble
-from gaitcore.silhouettes.roto import check_scribbles
+from gaitcore.silhouettes.annotations import Scribble, check_scribbles
 
 SCRIBBLES_FILTER = "Scribbles (*.json)"
 
