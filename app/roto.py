@@ -164,7 +164,7 @@ class RotoController(QObject):
 
         plural = "s" if len(indices) > 1 else ""
         job = Job(work, f"Re-propagating without the erased stroke{plural}")
-        self._view.set_pending((), erasing=tuple(project.scribbles[i] for i in sorted(indices)))
+        self._view.set_erasing(tuple(project.scribbles[i] for i in sorted(indices)))
         return self._start(job, project, lambda new: state.undo_stack.push(
             EraseScribblesCommand(state, indices, silhouettes=new)))
 
@@ -190,6 +190,7 @@ class RotoController(QObject):
         self._running = None
         pending, self._pending = self._pending, []
         self._view.set_pending(())
+        self._view.set_erasing(())
         if pending and self._landed:
             self.add_scribbles(pending, "paint")
         elif pending:

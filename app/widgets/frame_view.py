@@ -145,11 +145,14 @@ class FrameView(QWidget):
             self.show_onion = onion
         self._draw_overlays()
 
-    def set_pending(self, scribbles: tuple[Scribble, ...],
-                    erasing: tuple[Scribble, ...] = ()) -> None:
-        """Brush strokes painted but not yet in the project, and brush strokes of the project
-        being erased, drawn red (a correction is running)."""
-        self._pending, self._pending_erase = tuple(scribbles), tuple(erasing)
+    def set_pending(self, scribbles: tuple[Scribble, ...]) -> None:
+        """Brush strokes painted but not yet in the project (a correction is running)."""
+        self._pending = tuple(scribbles)
+        self._draw_overlays()
+
+    def set_erasing(self, scribbles: tuple[Scribble, ...]) -> None:
+        """Brush strokes of the project being erased, drawn red (their job is running)."""
+        self._pending_erase = tuple(scribbles)
         self._draw_overlays()
 
     def set_preview(self, mask: np.ndarray | None) -> None:

@@ -46,6 +46,13 @@ def test_erasing_a_brush_stroke_repropagates_without_it_as_one_undo_step(
     painted = window.state.project
     assert painted.silhouettes != segmented.silhouettes
     steps = stack.count()
+    job = window.tools.roto.erase({0})  # cancelled: nothing changes, the stroke stays
+    job.progressed.connect(lambda done, total: job.cancel())
+    with qtbot.waitSignal(job.cancelled, timeout=60_000):
+        pass
+    qtbot.waitUntil(lambda: not window.tools.roto.busy)
+    assert window.state.project == painted and stack.count() == steps
+    assert _red_paths(window) == 0
     for name, dock in window.docks.items():  # the footage large for the screenshot
         if name != "timeline":
             dock.close()

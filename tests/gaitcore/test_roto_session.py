@@ -100,6 +100,16 @@ def test_erasing_a_correction_gives_back_the_segmentation_before_it(clip):
         assert session.restore(painted) and session.states()[WRONG.frame].corrected
 
 
+def test_a_cancelled_erase_leaves_the_session_usable(clip):
+    project = _project(clip, [WRONG])
+    with open_frames(clip[0]) as source:
+        session = RotoSession.start(source, project)
+        before = session.silhouettes()
+        with pytest.raises(Cancelled):
+            session.erase(project, {0}, lambda done, total: False)
+        assert session.restore(project) and session.silhouettes() == before
+
+
 def test_without_a_session_erasing_segments_again(clip):
     other = Scribble([[80.0, 20.0]], 4, 13, "background")
     project = _project(clip, [WRONG, other])
