@@ -7,8 +7,8 @@ each key frame forward, and backward, by optical flow and a graph cut
 directions reach a frame their masks are blended, each weighted by its expected error there:
 its distance from its key times how far it drifted by the other key (one minus the IoU of its
 mask there and the key's), so a pass that swelled or shrank on the way hands the frames over
-to the other, and two passes that drifted alike are weighted by nearness. A correction
-changes only the frames between its neighbouring key frames.
+to the other, and two passes that drifted alike are weighted by nearness. A correction, or
+its erasing, changes only the frames between its neighbouring key frames.
 
 Only working-size masks are kept, bit-packed around the subject
 (:class:`~gaitcore.silhouettes.packed_masks.PackedMasks`), so a 10,000-frame clip costs tens
@@ -190,7 +190,8 @@ class RotoSegmentation:
         Raises
         ------
         GaitInputError
-            Frame 0 left with nothing to be cut from (no box, rectangles or subject stroke).
+            Frame 0 left with nothing to be cut from (no box, rectangles or subject stroke),
+            or cut again to fill its box.
         Cancelled
             When ``progress`` returned False.
         """
