@@ -116,6 +116,21 @@ class AddScribblesCommand(ProjectCommand):
         super().__init__(state, after, text, frame=scribbles[0].frame if scribbles else None)
 
 
+class EraseScribblesCommand(ProjectCommand):
+    """Remove the brush strokes at positions ``indices`` of ``project.scribbles``; with
+    ``silhouettes``, the segmentation re-propagated without them too (one undo step: undo
+    puts back both the strokes and the silhouettes)."""
+
+    def __init__(self, state: AppState, indices: set[int], *,
+                 silhouettes: Silhouettes | None = None) -> None:
+        after = state.project.without_scribbles(indices)
+        if silhouettes is not None:
+            after = replace(after, silhouettes=silhouettes)
+        text = "erase brush stroke" if len(indices) == 1 else f"erase {len(indices)} brush strokes"
+        frame = state.project.scribbles[min(indices)].frame if indices else None
+        super().__init__(state, after, text, frame=frame)
+
+
 class PinKeyCommand(ProjectCommand):
     """Force a frame into the key set (or release it)."""
 

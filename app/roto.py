@@ -2,10 +2,10 @@
 
 The controller keeps the project's :class:`~gaitcore.project.roto_session.RotoSession` (the
 engine of the last segmentation) and runs on it, as jobs with progress and Cancel: segmenting
-the clip, re-propagating a brush correction (one undo step: the strokes and the silhouettes
-they corrected), the first frame's cut-out before the clip runs, exporting masks and
-``segmentation.json``, and importing or exporting scribbles files. Everything it computes is
-:mod:`gaitcore.project.roto_session`.
+the clip, re-propagating a brush correction or the erasing of brush strokes (one undo step:
+the strokes and the silhouettes they changed), the first frame's cut-out before the clip
+runs, exporting masks and ``segmentation.json``, and importing or exporting scribbles files.
+Everything it computes is :mod:`gaitcore.project.roto_session`.
 """
 
 from __future__ import annotations
@@ -16,7 +16,12 @@ from pathlib import Path
 import numpy as np
 from PySide6.QtCore import QObject
 
-from app.commands import AddScribblesCommand, ProjectCommand, SetSilhouettesCommand
+from app.commands import (
+    AddScribblesCommand,
+    EraseScribblesCommand,
+    ProjectCommand,
+    SetSilhouettesCommand,
+)
 from app.document import DocumentController
 from app.state import AppState
 from app.widgets.frame_view import FrameView
@@ -26,14 +31,14 @@ from gaitcore.io.scribbles import read_scribbles, write_scribbles
 from gaitcore.project.roto_session import (
     RotoSession,
     corrected,
+    erased,
     export_masks,
     preview_first_frame,
     segmentation_key,
     sketch_as_scribbles,
 )
 from gaitcore.project.steps import check_segmentation_input
-from gaitcore.silhouettes.annotations import Scribble
-from gaitcore.silhouettes.roto import check_scribbles
+from gaitcore.silhouettes.annotations import Scribble, check_scribbles
 
 SCRIBBLES_FILTER = "Scribbles (*.json)"
 
@@ -54,6 +59,7 @@ class RotoController(QObject):
         self._preview_key: tuple | None = None
         self.previewing: Job | None = None
         view.scribblePainted.connect(self.paint)
+        view.scribblesErased.connect(self.erase)
         state.projectOpened.connect(self._forget)
         state.projectChanged.connect(self._refresh_preview)
 
@@ -135,6 +141,33 @@ class RotoController(QObject):
         return self._start(job, project, lambda new: state.undo_stack.push(
             AddScribblesCommand(state, scribbles, text, silhouettes=new)))
 
+    def erase(self, indices: set[int]) -> Job | None:
+        """Erase brush strokes (positions in the project's scribbles) as one undo step,
+        re-propagating without them when the clip is segmented; refused while a correction
+        runs (the strokes' positions would change under it)."""
+        state, project, source = self._state, self._state.project, self._state.source
+        if not indices:
+            return None
+        sil = project.silhouettes
+        if source is None or sil is None or sil.origin != "segmented":
+            state.undo_stack.push(EraseScribblesCommand(state, indices))
+            return None
+        if self._running is not None:
+            self._documents.messageRaised.emit("re-propagating: erase the stroke again when "
+                                               "the running correction ends")
+            return None
+        session = self._session
+
+        def work(progress):
+            done = erased(session, source, project, indices, progress)
+            return done, done.silhouettes()
+
+        plural = "s" if len(indices) > 1 else ""
+        job = Job(work, f"Re-propagating without the erased stroke{plural}")
+        self._view.set_erasing(tuple(project.scribbles[i] for i in sorted(indices)))
+        return self._start(job, project, lambda new: state.undo_stack.push(
+            EraseScribblesCommand(state, indices, silhouettes=new)))
+
     def _start(self, job: Job, project, push) -> Job:
         """Run a segmentation job; its result lands only on the project it was made for."""
         key = segmentation_key(project)
@@ -157,6 +190,7 @@ class RotoController(QObject):
         self._running = None
         pending, self._pending = self._pending, []
         self._view.set_pending(())
+        self._view.set_erasing(())
         if pending and self._landed:
             self.add_scribbles(pending, "paint")
         elif pending:

@@ -1,12 +1,14 @@
-"""One brush correction in the app: from the stroke to its undo step, over a 100-frame clip.
+"""One brush correction in the app, and its erasing: from the stroke to its undo step, over a
+100-frame clip.
 
 The window (offscreen Qt) opens a 100-frame clip, segments it from a box, then a background
 brush stroke is painted on frame 50 (``RotoController.paint``, what releasing the mouse
 does); the figure is the wall time until the correction (strokes and silhouettes) is on the
-undo stack, job, crops and the window's update included. Baseline in the same run: the whole
-clip segmented in the same window. Clips: the demo canter (320x240, rendered) and, where the
-real footage is present, the first 100 frames of Muybridge's race horse video (960x540).
-Target (issue #11): at most 5 s.
+undo stack, job, crops and the window's update included; then the stroke is erased
+(``RotoController.erase``, what the eraser's release does), timed the same way. Baseline in
+the same run: the whole clip segmented in the same window. Clips: the demo canter (320x240,
+rendered) and, where the real footage is present, the first 100 frames of Muybridge's race
+horse video (960x540). Target (issue #11): at most 5 s.
 
 Run ``python -m benchmarks roto_app``.
 """
@@ -48,7 +50,7 @@ def run() -> list[Section]:
             rows.append(_measure("Muybridge race horse, 960x540", folder, (110, 30, 760, 420),
                                  [(10, 528), (250, 528), (480, 528)]))
     headers = ["clip (100 frames)", "segment from the box (s)", "one correction on frame 50 (s)",
-               "frames re-propagated", "correction / segmentation"]
+               "frames re-propagated", "correction / segmentation", "erasing it (s)"]
     notes = [f"target: one correction re-propagated over a 100-frame clip in <= {TARGET_S:g} s",
              "wall time from the brush stroke to the undo step on the stack (job, engine, crops "
              "rebuilt, window updated); offscreen Qt, one run each"]
@@ -96,11 +98,16 @@ def _measure(name: str, folder: Path, box: tuple, stroke: list) -> list:
         correct_s = time.perf_counter() - t0
         first, stop = window.tools.roto._session.changed
         _wait(lambda: not window.runner.busy)
+        t0 = time.perf_counter()
+        window.tools.roto.erase({0})
+        _wait(lambda: window.state.undo_stack.count() > steps + 1)
+        erase_s = time.perf_counter() - t0
+        _wait(lambda: not window.runner.busy)
     finally:
         window.state.undo_stack.setClean()
         window.close()
     return [name, round(segment_s, 2), round(correct_s, 2), stop - first,
-            f"{correct_s / segment_s:.2f}"]
+            f"{correct_s / segment_s:.2f}", round(erase_s, 2)]
 
 
 def _wait(condition, timeout_s: float = 600.0) -> None:

@@ -74,11 +74,15 @@ class FrameView(QWidget):
     scribblePainted(Scribble)
         A subject or background brush stroke was painted on the current frame (the tools
         decide whether it re-propagates the segmentation).
+    scribblesErased(set)
+        The eraser went over brush strokes of the current frame: their positions in the
+        project's scribbles (the tools remove them and re-propagate).
     """
 
     frameShown = Signal(int)
     messageRaised = Signal(str)
     scribblePainted = Signal(object)
+    scribblesErased = Signal(object)
 
     def __init__(self, state: AppState, loader: FrameLoader, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -101,8 +105,10 @@ class FrameView(QWidget):
         self.canvas.addItem(self._window)
         self._overlays: list = []
         self._live: list = []
-        self._erasing: set[int] = set()
+        self._erasing: set[int] = set()  # strokes under the eraser
+        self._erasing_brush: set[int] = set()  # brush strokes under the eraser
         self._pending: tuple[Scribble, ...] = ()
+        self._pending_erase: tuple[Scribble, ...] = ()
         self._preview: np.ndarray | None = None
         self._shown = -1
         self._size: tuple[int, int] | None = None
@@ -142,6 +148,11 @@ class FrameView(QWidget):
     def set_pending(self, scribbles: tuple[Scribble, ...]) -> None:
         """Brush strokes painted but not yet in the project (a correction is running)."""
         self._pending = tuple(scribbles)
+        self._draw_overlays()
+
+    def set_erasing(self, scribbles: tuple[Scribble, ...]) -> None:
+        """Brush strokes of the project being erased, drawn red (their job is running)."""
+        self._pending_erase = tuple(scribbles)
         self._draw_overlays()
 
     def set_preview(self, mask: np.ndarray | None) -> None:
@@ -208,8 +219,14 @@ class FrameView(QWidget):
             if s.frame == frame:
                 colour = ERASE_COLOUR if i in self._erasing else STROKE_COLOUR
                 self._add_overlay(_path_item(s.points_xy, s.width_px, colour), 4)
-        for sc in project.scribbles_on(frame) + tuple(p for p in self._pending if p.frame == frame):
-            self._add_overlay(_path_item(sc.points_xy, sc.width_px, _brush_colour(sc.label)), 4)
+        for i, sc in enumerate(project.scribbles):
+            if sc.frame == frame:
+                erasing = i in self._erasing_brush or sc in self._pending_erase
+                colour = ERASE_COLOUR if erasing else _brush_colour(sc.label)
+                self._add_overlay(_path_item(sc.points_xy, sc.width_px, colour), 4)
+        for sc in self._pending:
+            if sc.frame == frame:
+                self._add_overlay(_path_item(sc.points_xy, sc.width_px, _brush_colour(sc.label)), 4)
 
     def _add_overlay(self, item, z: float) -> None:
         item.setZValue(z)
@@ -249,8 +266,8 @@ class FrameView(QWidget):
         for item in self._live:
             self.canvas.removeItem(item)
         self._live = []
-        if self._erasing:
-            self._erasing = set()
+        if self._erasing or self._erasing_brush:
+            self._erasing, self._erasing_brush = set(), set()
             self._draw_overlays()
 
     def _set_live(self, item) -> None:
@@ -295,16 +312,7 @@ class FrameView(QWidget):
         if self._state.n_frames == 0:
             return
         if self.canvas.tool is Tool.ERASE:
-            hits = self._erasing | self._state.project.strokes_hit(frame, points[-1], _ERASE_RADIUS_PX)
-            if finished:
-                self._erasing = set()
-                if hits:
-                    self._state.undo_stack.push(EraseStrokesCommand(self._state, hits))
-                else:
-                    self._draw_overlays()
-            elif hits != self._erasing:
-                self._erasing = hits
-                self._draw_overlays()
+            self._erase(frame, points[-1], finished)
             return
         label = self.canvas.tool.brush_label
         if not finished:
@@ -317,6 +325,23 @@ class FrameView(QWidget):
             return
         stroke = Stroke(_thin(points), self.pen_width_px, frame)
         self._state.undo_stack.push(AddStrokesCommand(self._state, [stroke]))
+
+    def _erase(self, frame: int, xy: np.ndarray, finished: bool) -> None:
+        """Strokes and brush strokes under the eraser turn red; on release the strokes are
+        erased (one undo step) and the brush strokes handed to the tools."""
+        project = self._state.project
+        hits = self._erasing | project.strokes_hit(frame, xy, _ERASE_RADIUS_PX)
+        brush = self._erasing_brush | project.scribbles_hit(frame, xy, _ERASE_RADIUS_PX)
+        if finished:
+            self._erasing, self._erasing_brush = set(), set()
+            self._draw_overlays()
+            if hits:
+                self._state.undo_stack.push(EraseStrokesCommand(self._state, hits))
+            if brush:
+                self.scribblesErased.emit(brush)
+        elif (hits, brush) != (self._erasing, self._erasing_brush):
+            self._erasing, self._erasing_brush = hits, brush
+            self._draw_overlays()
 
 
 def _brush_colour(label: str) -> QColor:

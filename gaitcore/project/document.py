@@ -14,7 +14,7 @@ undo stack only swaps whole values. :mod:`gaitcore.project.storage` reads and wr
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import MappingProxyType
@@ -324,6 +324,11 @@ class Project:
         """A copy without the strokes at positions ``indices`` of :attr:`strokes`."""
         return replace(self, strokes=tuple(s for i, s in enumerate(self.strokes) if i not in indices))
 
+    def without_scribbles(self, indices: Collection[int]) -> Project:
+        """A copy without the brush strokes at positions ``indices`` of :attr:`scribbles`."""
+        return replace(self, scribbles=tuple(s for i, s in enumerate(self.scribbles)
+                                             if i not in indices))
+
     def with_key_constraint(self, frame: int, *, pinned: bool | None, forbidden: bool | None) -> Project:
         """A copy where ``frame`` is (or is not) pinned and forbidden; None leaves it as is.
 
@@ -365,12 +370,12 @@ class Project:
         A stroke is hit when the point lies within ``radius_px`` of its pen's edge, i.e. the
         distance from ``xy`` to its polyline is at most ``width_px / 2 + radius_px``.
         """
-        p = np.asarray(xy, dtype=float)
-        hits = set()
-        for i, s in enumerate(self.strokes):
-            if s.frame == frame and _distance_to_polyline(s.points_xy, p) <= s.width_px / 2 + radius_px:
-                hits.add(i)
-        return hits
+        return _hits(self.strokes, frame, xy, radius_px)
+
+    def scribbles_hit(self, frame: int, xy: tuple[float, float], radius_px: float) -> set[int]:
+        """Positions in :attr:`scribbles` of the brush strokes of ``frame`` passing near
+        ``xy``, as :meth:`strokes_hit`."""
+        return _hits(self.scribbles, frame, xy, radius_px)
 
 
 def _field_equal(name: str, a, b) -> bool:
@@ -379,6 +384,15 @@ def _field_equal(name: str, a, b) -> bool:
     if name == "skeleton" and a is not None and b is not None:
         return a is b or a.to_dict() == b.to_dict()
     return a == b
+
+
+def _hits(strokes: tuple[Stroke, ...], frame: int, xy: tuple[float, float],
+          radius_px: float) -> set[int]:
+    """Positions of the strokes of ``frame`` within ``radius_px`` of their pen's edge from
+    ``xy``."""
+    p = np.asarray(xy, dtype=float)
+    return {i for i, s in enumerate(strokes)
+            if s.frame == frame and _distance_to_polyline(s.points_xy, p) <= s.width_px / 2 + radius_px}
 
 
 def _distance_to_polyline(points_xy: np.ndarray, p: np.ndarray) -> float:

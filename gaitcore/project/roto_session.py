@@ -3,8 +3,8 @@
 :func:`gaitcore.project.steps.segment` segments a clip and forgets how; an artist who paints a
 correction on frame 57 wants only the frames around 57 cut again. A :class:`RotoSession`
 keeps the :class:`~gaitcore.silhouettes.roto.RotoSegmentation` of the last run and every
-frame's tight crop, so that a correction re-propagates only up to the neighbouring corrected
-frames and rebuilds the project's :class:`~gaitcore.project.document.Silhouettes` from the
+frame's tight crop, so that a correction (or the erasing of one) re-propagates only up to the
+neighbouring corrected frames and rebuilds the project's :class:`~gaitcore.project.document.Silhouettes` from the
 crops it already has.
 
 Undo puts back an older project; the session then no longer matches it. It keeps copies of
@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import copy
 from collections import OrderedDict
-from collections.abc import Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -187,19 +187,53 @@ class RotoSession:
         Cancelled
             When ``progress`` returned False (the session goes back to ``project``'s state).
         """
+        self._change(project, project.with_scribbles(tuple(scribbles)),
+                     lambda engine: engine.correct(list(scribbles), progress))
+
+    def erase(self, project: Project, indices: Collection[int],
+              progress: Progress | None = None) -> None:
+        """Take brush strokes out of ``project``'s segmentation and re-propagate only where it
+        matters: a frame that keeps strokes is cut again, one left without strokes stops
+        being a corrected frame, and the change travels both ways up to the neighbouring
+        corrected frames.
+
+        Parameters
+        ----------
+        project : Project
+            The project with the strokes; the session must :meth:`matches` it.
+        indices : collection of int
+            Positions of the strokes in ``project.scribbles``.
+        progress : callable(done, total) -> bool, optional
+
+        Raises
+        ------
+        GaitInputError
+            The session does not match ``project``, or frame 0 is left with nothing to be cut
+            from.
+        Cancelled
+            When ``progress`` returned False (the session goes back to ``project``'s state).
+        """
+        after = project.without_scribbles(indices)
+        check_segmentation_input(after)  # before the engine is touched
+        self._change(project, after, lambda engine: engine.erase(indices, progress))
+
+    def _change(self, project: Project, after: Project,
+                edit: Callable[[RotoSegmentation], tuple[int, int]]) -> None:
+        """Go to ``project``'s state, ``edit`` its engine into ``after``'s and cut the crops
+        of the frames it changed again."""
         if not self.restore(project):
             raise GaitInputError("the segmentation no longer matches the project: segment the "
                                  "clip again")
         state = self._current()
         try:
-            first, stop = state.engine.correct(list(scribbles), progress)
+            first, stop = edit(state.engine)
             for t in range(first, stop):
                 found, state.states[t] = roto_frame(state.engine, t)
                 state.crops.replace(t, found)
         except BaseException:
-            self._state = None  # half corrected: the saved copy of ``project`` is the truth
+            self._state = None  # half changed: the saved copy of ``project`` is the truth
             raise
-        state.key = segmentation_key(project.with_scribbles(tuple(scribbles)))
+        state.key = segmentation_key(after)
         self.changed = (first, stop)
         self._save()
 
@@ -237,6 +271,25 @@ def corrected(session: RotoSession | None, source: FrameSource, project: Project
         session.correct(project, scribbles, progress)
         return session
     return RotoSession.start(source, project.with_scribbles(tuple(scribbles)), progress)
+
+
+def erased(session: RotoSession | None, source: FrameSource, project: Project,
+           indices: Collection[int], progress: Progress | None = None) -> RotoSession:
+    """``project``'s segmentation without the brush strokes at positions ``indices`` of
+    ``project.scribbles``.
+
+    Re-propagates with ``session`` when it holds (or kept) the segmentation of ``project``;
+    otherwise segments the whole clip from the project's inputs without those strokes.
+
+    Returns
+    -------
+    RotoSession
+        ``session`` itself or a new one; :meth:`RotoSession.silhouettes` gives the result.
+    """
+    if session is not None and session.source is source and session.restore(project):
+        session.erase(project, indices, progress)
+        return session
+    return RotoSession.start(source, project.without_scribbles(indices), progress)
 
 
 def preview_first_frame(source: FrameSource, project: Project,

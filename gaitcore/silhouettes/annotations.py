@@ -1,4 +1,5 @@
-"""Plain data of a Gait Studio project: rectangles drawn on frames and sketch strokes.
+"""Plain data of a Gait Studio project: rectangles drawn on frames, sketch strokes and brush
+strokes, and their checks against a clip.
 
 Values are frozen dataclasses of numbers and numpy arrays, never Qt types: an edit makes a
 new value, so undo only swaps the before and after values.
@@ -6,6 +7,7 @@ new value, so undo only swaps the before and after values.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -205,3 +207,30 @@ class Scribble(Stroke):
         """A copy with new points (and optionally another frame), same width and label."""
         return Scribble(points_xy, self.width_px, self.frame if frame is None else frame,
                         self.label)
+
+
+def check_start(box: Rect | None, subject_rects: Sequence[Rect],
+                background_rects: Sequence[Rect], scribbles: Sequence[Scribble]) -> None:
+    """Raise GaitInputError when frame 0 has nothing to be cut from."""
+    if box is None and not any(sc.frame == 0 and sc.label == "subject" for sc in scribbles):
+        if not subject_rects:
+            raise GaitInputError("no box and no subject rectangle given: draw a box around "
+                                 "the subject on the first frame (--box x,y,w,h)")
+        if not background_rects:
+            raise GaitInputError("no background rectangle given: draw at least one on the "
+                                 "first frame, or a box around the subject instead")
+
+
+def check_scribbles(scribbles: Sequence[Scribble], n_frames: int,
+                    shape: tuple[int, int]) -> None:
+    """Raise GaitInputError for a scribble outside the clip or entirely outside the frame."""
+    rows, cols = shape
+    for sc in scribbles:
+        if not 0 <= sc.frame < n_frames:
+            raise GaitInputError(f"a {sc.label} scribble is on frame {sc.frame} but the clip has "
+                                 f"{n_frames} frames (0..{n_frames - 1}): move or delete it")
+        p = sc.points_xy
+        if (p[:, 0].max() < 0 or p[:, 1].max() < 0 or p[:, 0].min() >= cols
+                or p[:, 1].min() >= rows):
+            raise GaitInputError(f"a {sc.label} scribble on frame {sc.frame} lies outside the "
+                                 f"{cols}x{rows} frame: draw it over the image")

@@ -7,8 +7,8 @@ each key frame forward, and backward, by optical flow and a graph cut
 directions reach a frame their masks are blended, each weighted by its expected error there:
 its distance from its key times how far it drifted by the other key (one minus the IoU of its
 mask there and the key's), so a pass that swelled or shrank on the way hands the frames over
-to the other, and two passes that drifted alike are weighted by nearness. A correction
-changes only the frames between its neighbouring key frames.
+to the other, and two passes that drifted alike are weighted by nearness. A correction, or
+its erasing, changes only the frames between its neighbouring key frames.
 
 Only working-size masks are kept, bit-packed around the subject
 (:class:`~gaitcore.silhouettes.packed_masks.PackedMasks`), so a 10,000-frame clip costs tens
@@ -17,7 +17,7 @@ of megabytes; frames are decoded again when a backward pass needs them.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterator, Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -25,7 +25,7 @@ import numpy as np
 
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Progress, report
-from gaitcore.silhouettes.annotations import Rect, Scribble
+from gaitcore.silhouettes.annotations import Rect, Scribble, check_scribbles, check_start
 from gaitcore.silhouettes.colour_model import ColourModel, check_frame, learn_colours, rect_mask
 from gaitcore.silhouettes.keyframe import (
     cut_first,
@@ -110,13 +110,7 @@ class RotoSegmentation:
         self.s = settings or PropagationSettings()
         first = check_frame(source[0])
         rows, cols = first.shape[:2]
-        if box is None and not any(sc.frame == 0 and sc.label == "subject" for sc in scribbles):
-            if not subject_rects:
-                raise GaitInputError("no box and no subject rectangle given: draw a box around "
-                                     "the subject on the first frame (--box x,y,w,h)")
-            if not background_rects:
-                raise GaitInputError("no background rectangle given: draw at least one on the "
-                                     "first frame, or a box around the subject instead")
+        check_start(box, subject_rects, background_rects, scribbles)
         self.box = None if box is None else box.clipped_to(cols, rows)
         self.subject_rects = [r.clipped_to(cols, rows) for r in subject_rects]
         self.background_rects = [r.clipped_to(cols, rows) for r in background_rects]
@@ -174,17 +168,49 @@ class RotoSegmentation:
         self.scribbles = self.scribbles + tuple(scribbles)
         lo, hi = self.n, 0
         for k in sorted({sc.frame for sc in scribbles}):
-            keys = sorted(self.keys)
-            prev = max([f for f in keys if f < k], default=None)
-            nxt = min([f for f in keys if f > k], default=self.n)
             current = self.keys[k].mask if k in self.keys else self._final(k)
             self.keys[k] = self._key_cut(k, current.astype(np.float32))
-            stop = min(nxt + 1, self.n)  # onto the next key: how far the pass drifted
-            done, total = [0], stop - 1 - (k if prev is None else prev)
-            self._forward(k, stop, progress, done, total)
-            if prev is not None:
-                self._backward(k, prev, progress, done, total)
-            lo, hi = min(lo, k if prev is None else prev + 1), max(hi, nxt)
+            first, stop = self._repropagate(k, progress)
+            lo, hi = min(lo, first), max(hi, stop)
+        return lo, hi
+
+    def erase(self, indices: Collection[int], progress: Progress | None = None
+              ) -> tuple[int, int]:
+        """Drop the strokes at positions ``indices`` of :attr:`scribbles` and re-propagate
+        only where it matters: a frame that keeps strokes is cut again from the forward
+        pass's mask, as :meth:`run` cuts it (frame 0 from its box or rectangles); one left
+        without strokes stops being a key frame, and its neighbouring keys' passes run across
+        it. The lost frames' reference area stays that of the first cut, as after
+        :meth:`correct`.
+
+        Returns
+        -------
+        (first, stop) : the range of frames that changed.
+
+        Raises
+        ------
+        GaitInputError
+            Frame 0 left with nothing to be cut from (no box, rectangles or subject stroke),
+            or cut again to fill its box.
+        Cancelled
+            When ``progress`` returned False.
+        """
+        gone = set(indices)
+        kept = tuple(sc for i, sc in enumerate(self.scribbles) if i not in gone)
+        check_start(self.box, self.subject_rects, self.background_rects, kept)
+        frames, self.scribbles = sorted({self.scribbles[i].frame for i in gone}), kept
+        lo, hi = self.n, 0
+        for k in frames:
+            if k == 0:
+                self.keys[0] = self._first_cut()
+                self._check_first_cut(self.keys[0].mask)
+            elif k in self.corrected_frames:
+                prev = self._neighbours(k - 1)[0]
+                self.keys[k] = self._key_cut(k, self._blend(k, prev, k, key_frames_only=True))
+            else:
+                del self.keys[k]
+            first, stop = self._repropagate(k, progress)
+            lo, hi = min(lo, first), max(hi, stop)
         return lo, hi
 
     def mask(self, t: int) -> np.ndarray:
@@ -308,6 +334,23 @@ class RotoSegmentation:
         return Cut(cut.mask, 1.0)
 
     # -- propagation ------------------------------------------------------------------------
+    def _repropagate(self, k: int, progress) -> tuple[int, int]:
+        """Carry the masks again across the key frames around frame ``k``, which is a key
+        frame just cut or one that just stopped being one: forward from it (or the key before
+        it) onto the next key, backward from it (or the next key) onto the key before it.
+        Returns the frames changed, ``(first, stop)``."""
+        keys = sorted(self.keys)
+        prev = max([f for f in keys if f < k], default=None)
+        nxt = min([f for f in keys if f > k], default=self.n)
+        start, back = (k, k) if k in self.keys else (prev, nxt)
+        stop = min(nxt + 1, self.n)  # onto the next key: how far the pass drifted
+        backward = prev is not None and back < self.n
+        done, total = [0], stop - 1 - start + (back - prev if backward else 0)
+        self._forward(start, stop, progress, done, total)
+        if backward:
+            self._backward(back, prev, progress, done, total)
+        return (k if prev is None else prev + 1), nxt
+
     def _frames(self, start: int, stop: int) -> Iterator[tuple[int, np.ndarray]]:
         """Working-size frames ``start <= t < stop`` in order."""
         if hasattr(self.source, "iter_frames"):
@@ -420,21 +463,6 @@ class RotoSegmentation:
         soft = (w * cv2.GaussianBlur(f.mask.astype(np.float32), (0, 0), 1.5)
                 + (1 - w) * cv2.GaussianBlur(g.mask.astype(np.float32), (0, 0), 1.5))
         return (soft > 0.5).astype(np.uint8)
-
-
-def check_scribbles(scribbles: Sequence[Scribble], n_frames: int,
-                    shape: tuple[int, int]) -> None:
-    """Raise GaitInputError for a scribble outside the clip or entirely outside the frame."""
-    rows, cols = shape
-    for sc in scribbles:
-        if not 0 <= sc.frame < n_frames:
-            raise GaitInputError(f"a {sc.label} scribble is on frame {sc.frame} but the clip has "
-                                 f"{n_frames} frames (0..{n_frames - 1}): move or delete it")
-        p = sc.points_xy
-        if (p[:, 0].max() < 0 or p[:, 1].max() < 0 or p[:, 0].min() >= cols
-                or p[:, 1].min() >= rows):
-            raise GaitInputError(f"a {sc.label} scribble on frame {sc.frame} lies outside the "
-                                 f"{cols}x{rows} frame: draw it over the image")
 
 
 def _union(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:

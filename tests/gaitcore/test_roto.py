@@ -62,6 +62,76 @@ def test_a_correction_changes_only_the_frames_up_to_the_neighbouring_keys():
         assert np.array_equal(seg.mask(t), after_10[t]), t
 
 
+def _masks(seg):
+    return [seg.mask(t).copy() for t in range(seg.n)]
+
+
+def _same_masks(a, b) -> None:
+    changed = [t for t in range(len(a)) if not np.array_equal(a[t], b[t])]
+    assert not changed, f"frames {changed} differ"
+
+
+def test_erasing_a_correction_gives_back_the_masks_before_it():
+    frames, truth = scene(14)
+    later = Scribble([[80.0, 20.0]], 4, 10, "background")
+    seg = RotoSegmentation(frames, box=padded_box(truth[0]), scribbles=[later])
+    seg.run()
+    original = _masks(seg)
+    wrong = Scribble([[30.0, 50.0], [70.0, 50.0]], 6, 7, "background")  # across the body
+    seg.correct([wrong])
+    assert not np.array_equal(seg.mask(7), original[7])
+    assert seg.erase([1]) == (1, 10)  # between the keys around it, 0 and 10
+    assert seg.scribbles == (later,) and sorted(seg.keys) == [0, 10]
+    assert not seg.state(7).corrected
+    _same_masks(_masks(seg), original)
+
+
+def test_erasing_strokes_is_a_fresh_run_without_them_up_to_the_next_key():
+    """Strokes on frames 0, 5 (two, one wrong) and 9. Erasing one re-propagates between the keys
+    around its frame, as a run from the start without it does there; a later key keeps its
+    cut and what follows it, as after a correction."""
+    frames, truth = scene(14)
+    box = padded_box(truth[0])
+    strokes = [Scribble([[46.0, 62.0], [46.0, 72.0]], 3, 0, "background"),  # off a leg
+               Scribble([[45.0, 56.0]], 4, 5, "subject"),
+               Scribble([[35.0, 46.0], [65.0, 46.0]], 4, 5, "background"),  # wrong
+               Scribble([[80.0, 20.0]], 4, 9, "background")]
+
+    def fresh(kept):
+        seg = RotoSegmentation(frames, box=box, scribbles=kept)
+        seg.run()
+        return _masks(seg)
+
+    seg = RotoSegmentation(frames, box=box, scribbles=strokes)
+    seg.run()
+    before = _masks(seg)
+    assert seg.erase([2]) == (1, 9)  # frame 5 keeps a stroke: cut again, still a key
+    assert sorted(seg.keys) == [0, 5, 9] and not np.array_equal(seg.mask(5), before[5])
+    _same_masks(_masks(seg)[:6], fresh([strokes[i] for i in (0, 1, 3)])[:6])
+    _same_masks(_masks(seg)[9:], before[9:])
+    assert seg.erase([2]) == (6, 14)  # frame 9 loses its only stroke: no longer a key
+    assert sorted(seg.keys) == [0, 5]
+    _same_masks(_masks(seg), fresh(strokes[:2]))
+    before = _masks(seg)
+    assert seg.erase([0]) == (0, 5)  # frame 0 is cut again from the box alone
+    assert not np.array_equal(seg.mask(0), before[0])
+    assert np.array_equal(seg.mask(0), fresh(strokes[1:2])[0])
+    _same_masks(_masks(seg)[5:], before[5:])
+
+
+def test_erasing_the_only_subject_of_the_first_frame_says_why_and_changes_nothing():
+    frames, truth = scene(6)
+    ys, xs = np.nonzero(truth[0])
+    seg = RotoSegmentation(frames, scribbles=[Scribble(np.c_[xs, ys][::60], 4, 0, "subject")],
+                           background_rects=[Rect(0, 0, 20, 20)])
+    seg.run()
+    before = _masks(seg)
+    with pytest.raises(GaitInputError, match="no box and no subject"):
+        seg.erase([0])
+    assert len(seg.scribbles) == 1
+    _same_masks(_masks(seg), before)
+
+
 class _Dilating:
     """A mask store whose masks grow by one pixel every two frames away from ``key``: a pass
     that drifts into the background."""

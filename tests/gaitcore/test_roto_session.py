@@ -9,13 +9,14 @@ import numpy as np
 import pytest
 
 from gaitcore.bench.scripted_user import padded_box
+from gaitcore.errors import GaitInputError
 from gaitcore.footage.sources import open_frames
 from gaitcore.progress import Cancelled
 from gaitcore.project.document import Project
-from gaitcore.project.roto_session import RotoSession, corrected, export_masks
+from gaitcore.project.roto_session import RotoSession, corrected, erased, export_masks
 from gaitcore.project.steps import segment
 from gaitcore.project.storage import load_project, save_project
-from gaitcore.silhouettes.annotations import Scribble
+from gaitcore.silhouettes.annotations import Rect, Scribble
 from tests.gaitcore.test_segmentation import scene
 
 N = 16
@@ -81,6 +82,65 @@ def test_without_a_session_a_correction_segments_again(clip):
     with open_frames(clip[0]) as source:
         session = corrected(None, source, project, [WRONG])
         assert session.silhouettes() == segment(source, project.with_scribbles((WRONG,)))
+
+
+def test_erasing_a_correction_gives_back_the_segmentation_before_it(clip):
+    project = _project(clip)
+    with open_frames(clip[0]) as source:
+        session = RotoSession.start(source, project)
+        before = session.silhouettes()
+        painted = project.with_scribbles((WRONG,))
+        session.correct(project, [WRONG])
+        assert erased(session, source, painted, {0}) is session
+        first, stop = session.changed
+        assert first <= WRONG.frame < stop
+        assert session.silhouettes() == before and not session.states()[WRONG.frame].corrected
+        assert session.matches(project)
+        # Undo of the erase: the painted project's state is still there.
+        assert session.restore(painted) and session.states()[WRONG.frame].corrected
+
+
+def test_a_cancelled_erase_leaves_the_session_usable(clip):
+    project = _project(clip, [WRONG])
+    with open_frames(clip[0]) as source:
+        session = RotoSession.start(source, project)
+        before = session.silhouettes()
+        with pytest.raises(Cancelled):
+            session.erase(project, {0}, lambda done, total: False)
+        assert session.restore(project) and session.silhouettes() == before
+
+
+def test_without_a_session_erasing_segments_again(clip):
+    other = Scribble([[80.0, 20.0]], 4, 13, "background")
+    project = _project(clip, [WRONG, other])
+    with open_frames(clip[0]) as source:
+        session = erased(None, source, project, {0})
+        assert session.silhouettes() == segment(source, _project(clip, [other]))
+
+
+def test_erasing_what_frame_0_starts_from_says_why_and_keeps_the_session(clip):
+    folder, truth = clip
+    ys, xs = np.nonzero(truth[0])
+    project = Project(footage=folder, scribbles=(Scribble(np.c_[xs, ys][::60], 4, 0, "subject"),),
+                      background_rects=(Rect(0, 0, 20, 20),))
+    with open_frames(folder) as source:
+        session = RotoSession.start(source, project)
+        before = session.silhouettes()
+        with pytest.raises(GaitInputError, match="draw a box"):
+            session.erase(project, {0})
+        assert session.silhouettes() == before
+
+
+def test_erasing_hits_only_brush_strokes_of_the_frame_near_the_point():
+    a = Scribble([[10.0, 10.0], [30.0, 10.0]], 4, 2, "subject")
+    b = Scribble([[10.0, 10.0], [30.0, 10.0]], 4, 3, "subject")
+    c = Scribble([[10.0, 20.0]], 4, 2, "background")
+    project = Project(scribbles=(a, b, c))
+    assert project.scribbles_hit(2, (20.0, 12.5), 1.0) == {0}  # 2.5 px from the line
+    assert project.scribbles_hit(2, (20.0, 13.5), 1.0) == set()  # beyond the pen's edge
+    assert project.scribbles_hit(2, (10.0, 15.0), 3.0) == {0, 2}
+    assert project.strokes_hit(2, (20.0, 10.0), 1.0) == set()
+    assert project.without_scribbles({0, 2}).scribbles == (b,)
 
 
 def test_export_masks_as_the_command_writes_them(clip, tmp_path):
