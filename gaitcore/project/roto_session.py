@@ -5,7 +5,9 @@ correction on frame 57 wants only the frames around 57 cut again. A :class:`Roto
 keeps the :class:`~gaitcore.silhouettes.roto.RotoSegmentation` of the last run and every
 frame's tight crop, so that a correction re-propagates only up to the neighbouring corrected
 frames and rebuilds the project's :class:`~gaitcore.project.document.Silhouettes` from the
-crops it already has.
+crops it already has. Saved beside the project (:mod:`gaitcore.project.engine_file`), the
+engine comes back when the project is reopened, so that the first correction then is as
+quick as the next ones.
 
 Undo puts back an older project; the session then no longer matches it. It keeps copies of
 its last few states, one per set of inputs (box, rectangles, brush strokes), and goes back to
@@ -33,6 +35,7 @@ from gaitcore.project.document import Project, Silhouettes
 from gaitcore.project.steps import check_segmentation_input
 from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
 from gaitcore.silhouettes.roto import FrameState, RotoSegmentation
+from gaitcore.silhouettes.roto_state import RotoState, restore_state, roto_state
 from gaitcore.silhouettes.segmentation import (
     SegmentationSettings,
     collect_roto,
@@ -115,6 +118,26 @@ class RotoSession:
         """
         engine = _engine(source, project, project.scribbles)
         engine.run(progress)
+        return cls._finished(source, engine, project)
+
+    @classmethod
+    def from_state(cls, source: FrameSource, project: Project,
+                   state: RotoState) -> RotoSession | None:
+        """The session of ``project`` put back from a state kept by :meth:`state_for`,
+        without decoding the clip (frame 0 only); None when the state does not fit the
+        project's clip, working size or corrected frames (then :meth:`start`)."""
+        try:
+            engine = _engine(source, project, project.scribbles)
+        except GaitInputError:
+            return None
+        if not restore_state(engine, state):
+            return None
+        return cls._finished(source, engine, project)
+
+    @classmethod
+    def _finished(cls, source: FrameSource, engine: RotoSegmentation,
+                  project: Project) -> RotoSession:
+        """A session on ``engine``, run for ``project``: every frame's crop and state."""
         states: dict[int, FrameState] = {}
         crops = collect_roto(engine, None, states.__setitem__)
         return cls(source, _EngineState(engine, crops, [states[t] for t in range(engine.n)],
@@ -145,6 +168,14 @@ class RotoSession:
     def states(self) -> tuple[FrameState, ...]:
         """Lost, corrected and confidence of every frame."""
         return tuple(self._current().states)
+
+    def state_for(self, project: Project) -> RotoState | None:
+        """The engine's state for ``project`` (current or kept for undo) as plain data, to
+        save; None when the session holds none."""
+        key = segmentation_key(project)
+        state = self._state if self._state is not None and self._state.key == key else \
+            self._saved.get(key)
+        return None if state is None else roto_state(state.engine)
 
     def mask(self, t: int) -> np.ndarray:
         """Frame ``t``'s full-frame mask as the command writes it, (rows, cols) uint8 0/255:
