@@ -74,7 +74,8 @@ class PackedMasks:
         """
         rows, cols = shape
         if (table.ndim != 2 or table.shape[1] != 6 or bits.ndim != 1 or bits.dtype != np.uint8
-                or not np.isfinite(table).all() or (table[:, :5] != np.round(table[:, :5])).any()):
+                or not np.isfinite(table).all() or (np.abs(table[:, :5]) >= 2**31).any()
+                or (table[:, :5] != np.round(table[:, :5])).any()):
             raise GaitInputError("saved masks are not a table of whole-pixel boxes and packed "
                                  "bits: the file is damaged")
         t, x, y, w, h = table[:, :5].astype(np.int64).T

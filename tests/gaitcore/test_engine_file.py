@@ -4,6 +4,7 @@ re-propagates only around its frame; damaged, stale or missing, the project stil
 from __future__ import annotations
 
 import json
+import shutil
 from dataclasses import replace
 
 import cv2
@@ -20,12 +21,16 @@ from gaitcore.project.engine_file import (
     read_engine,
     resumed,
     save_engine,
+    write_engine,
 )
 from gaitcore.project.roto_session import RotoSession, corrected
 from gaitcore.project.storage import load_project, save_project, sidecar_dir, write_array
 from gaitcore.silhouettes.annotations import Scribble
 from gaitcore.silhouettes.packed_masks import PackedMasks
-from gaitcore.silhouettes.propagate import Cut
+from gaitcore.silhouettes.propagate import Cut, WorkingSize
+from gaitcore.silhouettes.roto_state import RotoState
+from tests.fuzzing import DEFAULT_CASES, check_reader, mutate_json
+from tests.gaitcore.test_fuzz_readers import _damage_array
 from tests.gaitcore.test_segmentation import scene
 
 N = 16
@@ -193,6 +198,43 @@ def test_packed_masks_round_trip_and_refuse_bad_arrays():
         assert back.get(t).confidence == masks.get(t).confidence
     for bad_table, bad_bits, n in ((table, bits[:-1], 10), (table, bits, 8),
                                    (table + [[0, 0, 0, 30, 0, 0]], bits, 10),
+                                   (table + [[0, 1e18, 0, 0, 0, 0]], bits, 10),
                                    (table[:, :5], bits, 10)):
         with pytest.raises(GaitInputError, match="damaged"):
             PackedMasks.from_arrays((20, 30), bad_table, bad_bits, n_frames=n)
+
+
+def test_fuzzed_engine_files_read_as_none_or_as_masks_that_fit(tmp_path):
+    """Whatever the sidecar holds, reading the engine raises nothing (issue #15's fuzzing)."""
+    rng = np.random.default_rng(2)
+    stores = []
+    for frames in ((0, 4), (1, 2, 3, 5), (1, 2, 3)):
+        masks = PackedMasks((12, 16))
+        for t in frames:
+            masks.put(t, Cut((rng.random((12, 16)) > 0.5).astype(np.uint8), 0.5))
+        stores.append(masks)
+    state = RotoState(6, WorkingSize(0.5, (16, 12), (24, 32), 20.0), 40.0, *stores)
+    valid = tmp_path / "valid" / "p.gaitproj"
+    write_engine(valid, "f" * 64, state)
+    doc = json.loads((sidecar_dir(valid) / ENGINE_FILE).read_text())
+
+    def write_case(case_rng, folder):
+        path = folder / "p.gaitproj"
+        shutil.copytree(sidecar_dir(valid), sidecar_dir(path))
+        if case_rng.random() < 0.3:
+            _damage_array(case_rng.choice(sorted(sidecar_dir(path).glob("engine-*"))), case_rng)
+        else:
+            (sidecar_dir(path) / ENGINE_FILE).write_text(mutate_json(doc, case_rng))
+        return path
+
+    def fits(read):
+        if read is None:
+            return
+        for masks in (read.keys, read.fwd, read.bwd):
+            for t in masks.frames:
+                assert 0 <= t < read.n_frames
+                assert masks.get(t).mask.shape == read.work.wh[::-1]
+
+    check_reader(write_case, lambda p: read_engine(p, "f" * 64), tmp_path / "cases",
+                 n_cases=DEFAULT_CASES, seed=3, check=fits)
+    assert read_engine(valid, "f" * 64) is not None
