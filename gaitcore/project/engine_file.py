@@ -9,14 +9,14 @@ The engine is derived data, not the artist's work, so it lives apart from the pr
 document: ``horse.gaitproj.d/engine.json`` (format, version, a fingerprint of what the
 segmentation depends on, the working size, the key area and the names of two arrays) and
 ``engine-table-<hash>.npy`` and ``engine-bits-<hash>.npy`` beside it: the key frames' cuts and
-the forward and backward passes' masks, each a
-:class:`~gaitcore.silhouettes.packed_masks.PackedMasks` (a
-:class:`~gaitcore.silhouettes.roto_state.RotoState`). A project file without it, or with one
-another version wrote, reads as before; reading the engine never raises: a missing, damaged,
-stale or foreign file reads as None and the next correction segments the clip again (nothing
-the artist made is in it). Writing is atomic (arrays, then the JSON, then arrays no longer
-named are removed), as :mod:`gaitcore.project.storage` writes projects; the project's own
-files are never touched.
+the masks of the forward and backward passes, bit-packed around the subject (a
+:class:`~gaitcore.silhouettes.roto_state.RotoState`; 1.8 to 3 MB for the 540 frames of
+Muybridge's 960x540 race horse, more with more key frames). A project file without it, or
+with one another version wrote, reads as before; reading the engine never raises: a missing,
+damaged, stale or foreign file reads as None and the next correction segments the clip again
+(nothing the artist made is in it). Writing is atomic (arrays, then the JSON, then arrays no
+longer named are removed), as :mod:`gaitcore.project.storage` writes projects; the project's
+own files are never touched.
 
 Why a file of its own rather than an entry of the project JSON: the engine is a cache, so a
 damaged one must never stop the project from loading (``load_project`` refuses damaged
