@@ -1,9 +1,7 @@
 """Segmentation from a box, corrected by brush strokes on any frame (the Roto Brush model).
 
 The controller keeps the project's :class:`~gaitcore.project.roto_session.RotoSession` (the
-engine of the last segmentation; saved beside the project file when the project is saved, and
-put back from there by the first correction after reopening,
-:mod:`gaitcore.project.engine_file`) and runs on it, as jobs with progress and Cancel: segmenting
+engine of the last segmentation) and runs on it, as jobs with progress and Cancel: segmenting
 the clip, re-propagating a brush correction (one undo step: the strokes and the silhouettes
 they corrected), the first frame's cut-out before the clip runs, exporting masks and
 ``segmentation.json``, and importing or exporting scribbles files. Everything it computes is

@@ -5,15 +5,17 @@ correction on frame 57 wants only the frames around 57 cut again. A :class:`Roto
 keeps the :class:`~gaitcore.silhouettes.roto.RotoSegmentation` of the last run and every
 frame's tight crop, so that a correction re-propagates only up to the neighbouring corrected
 frames and rebuilds the project's :class:`~gaitcore.project.document.Silhouettes` from the
-crops it already has. Saved beside the project (:mod:`gaitcore.project.engine_file`), the
-engine comes back when the project is reopened, so that the first correction then is as
-quick as the next ones.
+crops it already has.
 
 Undo puts back an older project; the session then no longer matches it. It keeps copies of
 its last few states, one per set of inputs (box, rectangles, brush strokes), and goes back to
 the one matching the project; when none does, the next correction segments the clip again
 from the project's inputs, so a correction is always right for the project it is made on.
 Qt-free: the app runs these methods in its jobs, a script can call them directly.
+
+Saved beside the project (:mod:`gaitcore.project.engine_file`: :meth:`RotoSession.state_for`
+gives what is saved, :meth:`RotoSession.from_state` puts it back), the engine comes back when
+the project is reopened, so that the first correction then is as quick as the next ones.
 """
 
 from __future__ import annotations
