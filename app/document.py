@@ -34,10 +34,14 @@ class DocumentController(QObject):
         The recent files (list of str), newest first.
     messageRaised(str)
         A line for the status bar.
+    projectSaved(Path)
+        The project was written to this file (what goes beside it, such as the segmentation
+        engine, may follow).
     """
 
     recentChanged = Signal(list)
     messageRaised = Signal(str)
+    projectSaved = Signal(object)
 
     def __init__(self, state: AppState, asker: Asker, runner: JobRunner, autosaver: Autosaver,
                  parent: QObject | None = None) -> None:
@@ -129,6 +133,7 @@ class DocumentController(QObject):
         self._state.undo_stack.setClean()
         self.autosaver.discard()
         self._add_recent(path)
+        self.projectSaved.emit(Path(path))
         self.messageRaised.emit(f"saved {path}")
         return True
 

@@ -28,6 +28,7 @@ from app.widgets.frame_view import FrameView
 from app.workers import Job
 from gaitcore.errors import GaitInputError
 from gaitcore.io.scribbles import read_scribbles, write_scribbles
+from gaitcore.project.engine_file import resumed, save_engine
 from gaitcore.project.roto_session import (
     RotoSession,
     corrected,
@@ -57,10 +58,12 @@ class RotoController(QObject):
         self._pending: list[Scribble] = []
         self._landed = False
         self._preview_key: tuple | None = None
+        self._opened_from: Path | None = None
         self.previewing: Job | None = None
         view.scribblePainted.connect(self.paint)
         view.scribblesErased.connect(self.erase)
         state.projectOpened.connect(self._forget)
+        documents.projectSaved.connect(self._save_engine)
         state.projectChanged.connect(self._refresh_preview)
 
     @property
@@ -75,9 +78,22 @@ class RotoController(QObject):
         return self._session
 
     def _forget(self, *_opened) -> None:
+        """A project was opened: its engine, if saved with it, is put back by the first
+        correction (in its job), never before."""
         self._session, self._pending, self._preview_key = None, [], None
+        self._opened_from = self._state.path
         self._view.set_pending(())
         self._view.set_preview(None)
+
+    def _save_engine(self, path: Path) -> None:
+        """Keep the engine of the project just saved beside its file (a running job changes
+        the engine: then only an engine saved before is kept, if it still matches)."""
+        session = None if self._running is not None else self._session
+        try:
+            save_engine(path, self._state.project, session, opened_from=self._opened_from)
+        except GaitInputError as exc:
+            self._documents.messageRaised.emit(str(exc))
+        self._opened_from = path
 
     # -- segmenting -------------------------------------------------------------------------
     def segment(self) -> Job | None:
@@ -130,10 +146,11 @@ class RotoController(QObject):
             self._documents.messageRaised.emit("re-propagating: the stroke follows when the "
                                                "running correction ends")
             return self._running
-        session = self._session
+        session, saved = self._session, self._opened_from
 
         def work(progress):
-            done = corrected(session, source, project, scribbles, progress)
+            use = resumed(session, source, project, saved=saved)
+            done = corrected(use, source, project, scribbles, progress)
             return done, done.silhouettes()
 
         frames = sorted({sc.frame for sc in scribbles})
@@ -277,10 +294,10 @@ class RotoController(QObject):
                 title, Path(base).with_name(Path(base).stem + "_segmentation"))
             if folder is None:
                 return None
-        session, name = self._session, str(project.footage)
+        session, name, saved = self._session, str(project.footage), self._opened_from
 
         def work(progress):
-            use = session if session is not None and session.restore(project) else \
+            use = resumed(session, source, project, saved=saved) or \
                 RotoSession.start(source, project, progress)
             return export_masks(use, folder, source_name=name, progress=progress)
 

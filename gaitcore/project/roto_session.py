@@ -12,6 +12,10 @@ its last few states, one per set of inputs (box, rectangles, brush strokes), and
 the one matching the project; when none does, the next correction segments the clip again
 from the project's inputs, so a correction is always right for the project it is made on.
 Qt-free: the app runs these methods in its jobs, a script can call them directly.
+
+Saved beside the project (:mod:`gaitcore.project.engine_file`: :meth:`RotoSession.state_for`
+gives what is saved, :meth:`RotoSession.from_state` puts it back), the engine comes back when
+the project is reopened, so that the first correction then is as quick as the next ones.
 """
 
 from __future__ import annotations
@@ -33,6 +37,7 @@ from gaitcore.project.document import Project, Silhouettes
 from gaitcore.project.steps import check_segmentation_input
 from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
 from gaitcore.silhouettes.roto import FrameState, RotoSegmentation
+from gaitcore.silhouettes.roto_state import RotoState, restore_state, roto_state
 from gaitcore.silhouettes.segmentation import (
     SegmentationSettings,
     collect_roto,
@@ -115,6 +120,26 @@ class RotoSession:
         """
         engine = _engine(source, project, project.scribbles)
         engine.run(progress)
+        return cls._finished(source, engine, project)
+
+    @classmethod
+    def from_state(cls, source: FrameSource, project: Project,
+                   state: RotoState) -> RotoSession | None:
+        """The session of ``project`` put back from a state kept by :meth:`state_for`,
+        without decoding the clip (frame 0 only); None when the state does not fit the
+        project's clip, working size or corrected frames (then :meth:`start`)."""
+        try:
+            engine = _engine(source, project, project.scribbles)
+        except GaitInputError:
+            return None
+        if not restore_state(engine, state):
+            return None
+        return cls._finished(source, engine, project)
+
+    @classmethod
+    def _finished(cls, source: FrameSource, engine: RotoSegmentation,
+                  project: Project) -> RotoSession:
+        """A session on ``engine``, run for ``project``: every frame's crop and state."""
         states: dict[int, FrameState] = {}
         crops = collect_roto(engine, None, states.__setitem__)
         return cls(source, _EngineState(engine, crops, [states[t] for t in range(engine.n)],
@@ -145,6 +170,14 @@ class RotoSession:
     def states(self) -> tuple[FrameState, ...]:
         """Lost, corrected and confidence of every frame."""
         return tuple(self._current().states)
+
+    def state_for(self, project: Project) -> RotoState | None:
+        """The engine's state for ``project`` (current or kept for undo) as plain data, to
+        save; None when the session holds none."""
+        key = segmentation_key(project)
+        state = self._state if self._state is not None and self._state.key == key else \
+            self._saved.get(key)
+        return None if state is None else roto_state(state.engine)
 
     def mask(self, t: int) -> np.ndarray:
         """Frame ``t``'s full-frame mask as the command writes it, (rows, cols) uint8 0/255:

@@ -152,10 +152,10 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
     if project.silhouettes is not None:
         roi = project.silhouettes.roi
         arrays = {
-            "crops_packed": _write_array(side, "crops_packed",
+            "crops_packed": write_array(side, "crops_packed",
                                          np.packbits(np.asarray(roi.crops, dtype=bool), axis=-1)),
-            "centers_xy": _write_array(side, "centers_xy", np.asarray(roi.centers_xy, dtype=np.float64)),
-            "lost": _write_array(side, "lost", np.asarray(roi.lost, dtype=bool)),
+            "centers_xy": write_array(side, "centers_xy", np.asarray(roi.centers_xy, dtype=np.float64)),
+            "lost": write_array(side, "lost", np.asarray(roi.lost, dtype=bool)),
         }
         sil = {"origin": project.silhouettes.origin, "scale": float(roi.scale),
                "crops_shape": list(roi.crops.shape), "arrays": arrays}
@@ -353,14 +353,22 @@ def _refuse_newer(p: Path) -> None:
 
 
 # -- arrays ----------------------------------------------------------------------------
-def _write_array(side: Path, stem: str, arr: np.ndarray) -> str:
-    buf = io.BytesIO()
-    np.save(buf, arr, allow_pickle=False)
-    data = buf.getvalue()
-    name = f"{stem}-{hashlib.sha256(data).hexdigest()[:16]}.npy"
+def write_array(side: Path, stem: str, arr: np.ndarray) -> str:
+    """Write ``arr`` into folder ``side`` as ``<stem>-<hash of its content>.npy`` (atomically,
+    unless a file of that name, hence that content, is there already); returns the name."""
+    name, data = array_file(stem, arr)
     if not (side / name).exists():
         write_atomic(side / name, data)
     return name
+
+
+def array_file(stem: str, arr: np.ndarray) -> tuple[str, bytes]:
+    """The name :func:`write_array` gives ``arr`` and the bytes it writes (a reader that
+    computes the name again from the array it read sees any damage that kept it readable)."""
+    buf = io.BytesIO()
+    np.save(buf, arr, allow_pickle=False)
+    data = buf.getvalue()
+    return f"{stem}-{hashlib.sha256(data).hexdigest()[:16]}.npy", data
 
 
 def _read_silhouettes(sil: JsonValue, side: Path) -> Silhouettes:

@@ -1,0 +1,62 @@
+"""The state of a finished :class:`~gaitcore.silhouettes.roto.RotoSegmentation` as plain data,
+to keep it in a file and put it back without decoding the clip (frame 0 only).
+
+What a correction needs of the engine is its working size, the key frames' cuts, the masks
+the forward and backward passes carried, and the first cut's area; everything else (the
+inputs: box, rectangles, brush strokes) comes from the project it is put back for.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from gaitcore.silhouettes.packed_masks import PackedMasks
+from gaitcore.silhouettes.propagate import WorkingSize
+from gaitcore.silhouettes.roto import RotoSegmentation
+
+
+@dataclass(frozen=True)
+class RotoState:
+    """The masks and sizes of a finished segmentation.
+
+    Attributes
+    ----------
+    n_frames : int
+        Frames of the clip.
+    work : WorkingSize
+        The engine's working size (scale, wh, shape, subject_side).
+    key_area : float
+        The first cut's area in working pixels (what "lost" is measured against).
+    keys, fwd, bwd : PackedMasks
+        The key frames' cuts, and the masks of the forward and backward passes, at the
+        working size.
+    """
+
+    n_frames: int
+    work: WorkingSize
+    key_area: float
+    keys: PackedMasks
+    fwd: PackedMasks
+    bwd: PackedMasks
+
+
+def roto_state(seg: RotoSegmentation) -> RotoState:
+    """The state of ``seg`` (after :meth:`~RotoSegmentation.run`); the passes' masks are
+    shared with it, not copied."""
+    keys = PackedMasks(seg.fwd.shape)
+    for t, cut in seg.keys.items():
+        keys.put(t, cut)
+    return RotoState(seg.n, seg.work, seg.key_area, keys, seg.fwd, seg.bwd)
+
+
+def restore_state(seg: RotoSegmentation, state: RotoState) -> bool:
+    """Put ``state`` into ``seg``, a new engine made from the same inputs, as if it had run;
+    False (``seg`` untouched) when the state is of another clip, working size or set of key
+    frames."""
+    keys = state.keys.frames
+    if (state.n_frames != seg.n or state.work != seg.work
+            or set(keys) != {0, *seg.corrected_frames}):
+        return False
+    seg.keys = {t: cut for t in keys if (cut := state.keys.get(t)) is not None}
+    seg.fwd, seg.bwd, seg.key_area = state.fwd, state.bwd, state.key_area
+    return True
