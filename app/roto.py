@@ -173,10 +173,11 @@ class RotoController(QObject):
             self._documents.messageRaised.emit("re-propagating: erase the stroke again when "
                                                "the running correction ends")
             return None
-        session = self._session
+        session, saved = self._session, self._opened_from
 
         def work(progress):
-            done = erased(session, source, project, indices, progress)
+            done = erased(resumed(session, source, project, saved=saved), source, project,
+                          indices, progress)
             return done, done.silhouettes()
 
         plural = "s" if len(indices) > 1 else ""

@@ -45,6 +45,15 @@ def test_the_first_correction_after_reopening_needs_no_new_segmentation(
     # Undo goes back to the project as it was opened, and a correction from there works.
     window.state.undo_stack.undo()
     assert window.state.project == saved
+    # Erasing the opened project's stroke needs no new segmentation either.
+    assert window.open_path(path)
+    wait_ready(qtbot, window)
+    job = window.tools.roto.erase({0})
+    qtbot.waitUntil(lambda: not window.tools.roto.busy, timeout=60_000)
+    assert job is not None and not asker.errors
+    assert window.state.project.scribbles == ()
+    assert window.tools.roto.session.changed == (1, 100)
+    window.state.undo_stack.undo()
     _paint(qtbot, window, Tool.BACKGROUND_BRUSH, 80, [(232, 52), (250, 62)])
     assert window.state.project.corrected_frames() == (30, 80)
     assert window.tools.roto.session.changed == (31, 100)
