@@ -7,7 +7,6 @@ import json
 import shutil
 from dataclasses import replace
 
-import cv2
 import numpy as np
 import pytest
 
@@ -30,28 +29,19 @@ from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import Cut, WorkingSize
 from gaitcore.silhouettes.roto_state import RotoState
 from tests.fuzzing import DEFAULT_CASES, check_reader, mutate_json
+from tests.gaitcore.conftest import SCENE_FRAMES
 from tests.gaitcore.test_fuzz_readers import _damage_array
-from tests.gaitcore.test_segmentation import scene
 
-N = 16
+N = SCENE_FRAMES
 KEY = Scribble([[40.0, 52.0]], 4, 5, "subject")
 """A stroke on frame 5: a key frame that bounds the range a later correction changes."""
 WRONG = Scribble([[30.0, 50.0], [70.0, 50.0]], 6, 11, "background")  # across the body
 
 
-@pytest.fixture(scope="module")
-def clip(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("scene") / "images"
-    folder.mkdir()
-    frames, truth = scene(N)
-    for t, img in enumerate(frames):
-        cv2.imwrite(str(folder / f"{t:05d}.png"), img)
-    return folder, truth
 
-
-def _saved_project(clip, path, scribbles=(KEY,)):
+def _saved_project(scene_images, path, scribbles=(KEY,)):
     """A segmented project saved with its engine at ``path``; returns the session."""
-    folder, truth = clip
+    folder, truth = scene_images
     project = Project(footage=folder, box=padded_box(truth[0]), scribbles=tuple(scribbles))
     with open_frames(folder) as source:
         session = RotoSession.start(source, project)
@@ -67,11 +57,11 @@ def _no_full_segmentation(monkeypatch):
     monkeypatch.setattr(RotoSession, "start", refuse)
 
 
-def test_a_reopened_project_corrects_as_the_session_that_stayed_open(clip, tmp_path,
+def test_a_reopened_project_corrects_as_the_session_that_stayed_open(scene_images, tmp_path,
                                                                      monkeypatch):
     path = tmp_path / "horse.gaitproj"
-    project, _ = _saved_project(clip, path)
-    with open_frames(clip[0]) as source:
+    project, _ = _saved_project(scene_images, path)
+    with open_frames(scene_images[0]) as source:
         kept = RotoSession.start(source, project)
         kept.correct(project, [WRONG])
         loaded = load_project(path)
@@ -85,9 +75,9 @@ def test_a_reopened_project_corrects_as_the_session_that_stayed_open(clip, tmp_p
         assert session.restore(loaded) and session.silhouettes() == project.silhouettes
 
 
-def test_the_engine_is_small_and_holds_the_masks_exactly(clip, tmp_path):
+def test_the_engine_is_small_and_holds_the_masks_exactly(scene_images, tmp_path):
     path = tmp_path / "horse.gaitproj"
-    project, session = _saved_project(clip, path)
+    project, session = _saved_project(scene_images, path)
     side = sidecar_dir(path)
     engine_bytes = sum(f.stat().st_size for f in side.glob("engine*"))
     assert 0 < engine_bytes < 64 * 1024
@@ -143,23 +133,23 @@ def _other_version(side):
 
 @pytest.mark.parametrize("damage", [_truncate, _garble, _bad_json, _swap_boxes, _missing,
                                     _other_version])
-def test_a_damaged_engine_is_ignored_and_the_correction_segments_again(clip, tmp_path, damage):
+def test_a_damaged_engine_is_ignored_and_the_correction_segments_again(scene_images, tmp_path, damage):
     path = tmp_path / "horse.gaitproj"
-    _saved_project(clip, path)
+    _saved_project(scene_images, path)
     damage(sidecar_dir(path))
     loaded = load_project(path)  # the project opens
-    with open_frames(clip[0]) as source:
+    with open_frames(scene_images[0]) as source:
         assert resumed(None, source, loaded, saved=path) is None
         session = corrected(resumed(None, source, loaded, saved=path), source, loaded, [WRONG])
         fresh = RotoSession.start(source, loaded.with_scribbles((WRONG,)))
         assert session.changed == (0, N) and session.silhouettes() == fresh.silhouettes()
 
 
-def test_an_engine_of_other_inputs_is_never_used(clip, tmp_path):
+def test_an_engine_of_other_inputs_is_never_used(scene_images, tmp_path):
     path = tmp_path / "horse.gaitproj"
-    project, _ = _saved_project(clip, path)
+    project, _ = _saved_project(scene_images, path)
     moved = project.with_scribbles((Scribble([[60.0, 40.0]], 4, 3, "background"),))
-    with open_frames(clip[0]) as source:
+    with open_frames(scene_images[0]) as source:
         assert resumed(None, source, moved, saved=path) is None
     # Saved without a session, the stale engine is removed; a matching one is kept.
     save_project(moved, path)
@@ -167,14 +157,14 @@ def test_an_engine_of_other_inputs_is_never_used(clip, tmp_path):
     assert not list(sidecar_dir(path).glob("engine*"))
 
 
-def test_save_as_carries_the_engine_and_undo_states_are_saved(clip, tmp_path):
+def test_save_as_carries_the_engine_and_undo_states_are_saved(scene_images, tmp_path):
     path = tmp_path / "horse.gaitproj"
-    project, session = _saved_project(clip, path)
+    project, session = _saved_project(scene_images, path)
     other = tmp_path / "copy" / "horse.gaitproj"
     save_project(project, other)
     assert save_engine(other, project, None, opened_from=path)
     assert read_engine(other, engine_fingerprint(project)) is not None
-    with open_frames(clip[0]) as source:
+    with open_frames(scene_images[0]) as source:
         session = RotoSession.start(source, project)
         session.correct(project, [WRONG])
         # After an undo the project is the one without WRONG: its kept state is saved.

@@ -17,36 +17,27 @@ from gaitcore.project.roto_session import RotoSession, corrected, erased, export
 from gaitcore.project.steps import segment
 from gaitcore.project.storage import load_project, save_project
 from gaitcore.silhouettes.annotations import Rect, Scribble
-from tests.gaitcore.test_segmentation import scene
+from tests.gaitcore.conftest import SCENE_FRAMES
 
-N = 16
+N = SCENE_FRAMES
 WRONG = Scribble([[30.0, 50.0], [70.0, 50.0]], 6, 9, "background")  # across the body
 
 
-@pytest.fixture(scope="module")
-def clip(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("scene") / "images"
-    folder.mkdir()
-    frames, truth = scene(N)
-    for t, img in enumerate(frames):
-        cv2.imwrite(str(folder / f"{t:05d}.png"), img)
-    return folder, truth
 
-
-def _project(clip, scribbles=()):
-    folder, truth = clip
+def _project(scene_images, scribbles=()):
+    folder, truth = scene_images
     return Project(footage=folder, box=padded_box(truth[0]), scribbles=tuple(scribbles))
 
 
-def test_session_segments_as_the_project_step(clip):
-    project = _project(clip, [Scribble([[40.0, 52.0]], 4, 5, "subject")])
-    with open_frames(clip[0]) as source:
+def test_session_segments_as_the_project_step(scene_images):
+    project = _project(scene_images, [Scribble([[40.0, 52.0]], 4, 5, "subject")])
+    with open_frames(scene_images[0]) as source:
         assert RotoSession.start(source, project).silhouettes() == segment(source, project)
 
 
-def test_a_correction_changes_only_its_range_and_undo_finds_the_older_state(clip):
-    project = _project(clip)
-    with open_frames(clip[0]) as source:
+def test_a_correction_changes_only_its_range_and_undo_finds_the_older_state(scene_images):
+    project = _project(scene_images)
+    with open_frames(scene_images[0]) as source:
         session = RotoSession.start(source, project)
         before = session.silhouettes()
         after_project = project.with_scribbles((WRONG,))
@@ -67,9 +58,9 @@ def test_a_correction_changes_only_its_range_and_undo_finds_the_older_state(clip
         assert not session.states()[WRONG.frame].corrected
 
 
-def test_cancelled_correction_leaves_the_session_usable(clip):
-    project = _project(clip)
-    with open_frames(clip[0]) as source:
+def test_cancelled_correction_leaves_the_session_usable(scene_images):
+    project = _project(scene_images)
+    with open_frames(scene_images[0]) as source:
         session = RotoSession.start(source, project)
         before = session.silhouettes()
         with pytest.raises(Cancelled):
@@ -77,16 +68,16 @@ def test_cancelled_correction_leaves_the_session_usable(clip):
         assert session.restore(project) and session.silhouettes() == before
 
 
-def test_without_a_session_a_correction_segments_again(clip):
-    project = _project(clip)
-    with open_frames(clip[0]) as source:
+def test_without_a_session_a_correction_segments_again(scene_images):
+    project = _project(scene_images)
+    with open_frames(scene_images[0]) as source:
         session = corrected(None, source, project, [WRONG])
         assert session.silhouettes() == segment(source, project.with_scribbles((WRONG,)))
 
 
-def test_erasing_a_correction_gives_back_the_segmentation_before_it(clip):
-    project = _project(clip)
-    with open_frames(clip[0]) as source:
+def test_erasing_a_correction_gives_back_the_segmentation_before_it(scene_images):
+    project = _project(scene_images)
+    with open_frames(scene_images[0]) as source:
         session = RotoSession.start(source, project)
         before = session.silhouettes()
         painted = project.with_scribbles((WRONG,))
@@ -100,9 +91,9 @@ def test_erasing_a_correction_gives_back_the_segmentation_before_it(clip):
         assert session.restore(painted) and session.states()[WRONG.frame].corrected
 
 
-def test_a_cancelled_erase_leaves_the_session_usable(clip):
-    project = _project(clip, [WRONG])
-    with open_frames(clip[0]) as source:
+def test_a_cancelled_erase_leaves_the_session_usable(scene_images):
+    project = _project(scene_images, [WRONG])
+    with open_frames(scene_images[0]) as source:
         session = RotoSession.start(source, project)
         before = session.silhouettes()
         with pytest.raises(Cancelled):
@@ -110,16 +101,16 @@ def test_a_cancelled_erase_leaves_the_session_usable(clip):
         assert session.restore(project) and session.silhouettes() == before
 
 
-def test_without_a_session_erasing_segments_again(clip):
+def test_without_a_session_erasing_segments_again(scene_images):
     other = Scribble([[80.0, 20.0]], 4, 13, "background")
-    project = _project(clip, [WRONG, other])
-    with open_frames(clip[0]) as source:
+    project = _project(scene_images, [WRONG, other])
+    with open_frames(scene_images[0]) as source:
         session = erased(None, source, project, {0})
-        assert session.silhouettes() == segment(source, _project(clip, [other]))
+        assert session.silhouettes() == segment(source, _project(scene_images, [other]))
 
 
-def test_erasing_what_frame_0_starts_from_says_why_and_keeps_the_session(clip):
-    folder, truth = clip
+def test_erasing_what_frame_0_starts_from_says_why_and_keeps_the_session(scene_images):
+    folder, truth = scene_images
     ys, xs = np.nonzero(truth[0])
     project = Project(footage=folder, scribbles=(Scribble(np.c_[xs, ys][::60], 4, 0, "subject"),),
                       background_rects=(Rect(0, 0, 20, 20),))
@@ -143,29 +134,29 @@ def test_erasing_hits_only_brush_strokes_of_the_frame_near_the_point():
     assert project.without_scribbles({0, 2}).scribbles == (b,)
 
 
-def test_export_masks_as_the_command_writes_them(clip, tmp_path):
-    project = _project(clip, [WRONG])
-    with open_frames(clip[0]) as source:
+def test_export_masks_as_the_command_writes_them(scene_images, tmp_path):
+    project = _project(scene_images, [WRONG])
+    with open_frames(scene_images[0]) as source:
         session = RotoSession.start(source, project)
         assert export_masks(session, tmp_path, source_name="scene") == N
     masks = sorted((tmp_path / "masks").glob("*.png"))
     assert [m.name for m in masks] == [f"{t:05d}.png" for t in range(N)]
     first = cv2.imread(str(masks[0]), cv2.IMREAD_UNCHANGED)
-    assert first.shape == clip[1][0].shape and set(np.unique(first)) <= {0, 255}
+    assert first.shape == scene_images[1][0].shape and set(np.unique(first)) <= {0, 255}
     data = json.loads((tmp_path / "segmentation.json").read_text())
     assert data["n_frames"] == N and data["frames"][WRONG.frame]["corrected"]
 
 
-def test_scribbles_are_saved_with_the_project(clip, tmp_path):
-    project = _project(clip, [WRONG, Scribble([[40.0, 52.0], [45, 60]], 4.5, 5, "subject")])
+def test_scribbles_are_saved_with_the_project(scene_images, tmp_path):
+    project = _project(scene_images, [WRONG, Scribble([[40.0, 52.0], [45, 60]], 4.5, 5, "subject")])
     save_project(project, tmp_path / "p.gaitproj")
     loaded = load_project(tmp_path / "p.gaitproj")
     assert loaded.scribbles == project.scribbles and loaded.corrected_frames() == (5, 9)
 
 
-def test_old_project_files_open_without_scribbles(clip, tmp_path):
+def test_old_project_files_open_without_scribbles(scene_images, tmp_path):
     path = tmp_path / "old.gaitproj"
-    save_project(_project(clip), path)
+    save_project(_project(scene_images), path)
     doc = json.loads(path.read_text())
     del doc["scribbles"]
     path.write_text(json.dumps(doc))

@@ -1,0 +1,22 @@
+"""Fixtures shared by the gaitcore tests."""
+
+from __future__ import annotations
+
+import cv2
+import pytest
+
+from tests.gaitcore.test_segmentation import scene
+
+SCENE_FRAMES = 16
+
+
+@pytest.fixture(scope="module")
+def scene_images(tmp_path_factory):
+    """The synthetic trotting scene (``SCENE_FRAMES`` frames) as a folder of PNG images, and
+    its true masks."""
+    folder = tmp_path_factory.mktemp("scene") / "images"
+    folder.mkdir()
+    frames, truth = scene(SCENE_FRAMES)
+    for t, img in enumerate(frames):
+        cv2.imwrite(str(folder / f"{t:05d}.png"), img)
+    return folder, truth
