@@ -20,8 +20,9 @@ from tests.app.conftest import viewport_pos, wait_ready
 from tests.gaitcore.walker import walker_clip
 
 
-def drag(qtbot, window, points_xy):
-    """Press, move through and release at image points ``points_xy`` of the frame view.
+def drag(qtbot, window, points_xy, before_release=None):
+    """Press, move through and release at image points ``points_xy`` of the frame view
+    (calling ``before_release()``, when given, just before the release).
 
     Waits a double-click interval first, so that two drags in a row are not a double click.
     """
@@ -32,6 +33,8 @@ def drag(qtbot, window, points_xy):
     qtbot.mousePress(viewport, Qt.MouseButton.LeftButton, pos=pos[0])
     for p in pos[1:]:
         qtbot.mouseMove(viewport, p)
+    if before_release is not None:
+        before_release()
     qtbot.mouseRelease(viewport, Qt.MouseButton.LeftButton, pos=pos[-1])
 
 

@@ -2,12 +2,9 @@
 
 from __future__ import annotations
 
-from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QApplication
-
 from app.widgets.frame_canvas import Tool
 from app.widgets.frame_view import ERASE_COLOUR
-from tests.app.conftest import viewport_pos, wait_ready
+from tests.app.conftest import wait_ready
 from tests.app.test_main_window import choose_tool, drag
 from tests.app.test_roto_brush import BOX_DRAG, HEAD_0, HEAD_30, _paint, _segment_from_box
 
@@ -24,18 +21,15 @@ def _red_paths(window) -> int:
 def _erase_showing(qtbot, window, points_xy, shot=None) -> int:
     """Drag the eraser through ``points_xy``; before the release, count the red strokes
     (and save a screenshot to ``shot``)."""
-    qtbot.wait(QApplication.doubleClickInterval() + 20)
-    fv = window.frame_view
-    viewport = fv._view.viewport()
-    pos = [viewport_pos(fv._view, fv.canvas, p) for p in points_xy]
-    qtbot.mousePress(viewport, Qt.MouseButton.LeftButton, pos=pos[0])
-    for p in pos[1:]:
-        qtbot.mouseMove(viewport, p)
-    red = _red_paths(window)
-    if shot is not None:
-        window.grab().save(str(shot))
-    qtbot.mouseRelease(viewport, Qt.MouseButton.LeftButton, pos=pos[-1])
-    return red
+    red = []
+
+    def look() -> None:
+        red.append(_red_paths(window))
+        if shot is not None:
+            window.grab().save(str(shot))
+
+    drag(qtbot, window, points_xy, before_release=look)
+    return red[0]
 
 
 def test_erasing_a_brush_stroke_repropagates_without_it_as_one_undo_step(
