@@ -59,46 +59,12 @@ def run() -> list[Section]:
 
 # -- the child process -------------------------------------------------------------------------
 def _measure() -> dict:
-    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")  # as app.main: pyrender and the viewport
-    if os.environ["PYOPENGL_PLATFORM"] == "egl":
-        os.environ.setdefault("QT_XCB_GL_INTEGRATION", "xcb_egl")
-    from PySide6.QtCore import QCoreApplication
-    from PySide6.QtWidgets import QApplication
-
-    from app.widgets.skeleton_gl import opengl_available, share_gl_resources
-
-    share_gl_resources()
-    app = QApplication([])
-    QCoreApplication.setOrganizationName("GaitStudio")
-    QCoreApplication.setApplicationName("Gait Studio")
-    if not opengl_available():
-        raise RuntimeError(f"no OpenGL widget on Qt platform {app.platformName()!r}")
+    app = _gl_application()
     import tempfile
 
-    from app.demo import DEMO_GAIT, demo_folder, demo_project
-    from app.dialogs import HeadlessAsker
-    from app.main_window import MainWindow
-    from gaitcore.bench import generate_gait
-
-    project = demo_project(demo_folder())
     with tempfile.TemporaryDirectory() as tmp:
-        window = MainWindow(asker=HeadlessAsker(), recovery_dir=Path(tmp), remember_layout=False)
-        for key in ("posing", "eigen", "pcs", "diagnosis"):
-            window.docks[key].hide()  # the footage and the viewport side by side, nothing else
+        window = _posed_demo(app, Path(tmp))
         gl_view = window.viewport.gl_view
-        window.viewport.gl_container.setFixedSize(*VIEWPORT)
-        window.resize(1500, 980)
-        window.show()
-        window.documents.open_demo(project)
-        _wait(app, lambda: window.is_ready() and window.state.analysis is not None)
-        truth = generate_gait(window.state.skeleton, DEMO_GAIT, window.state.n_frames)
-        for k in window.state.analysis.key_frames:
-            window.state.set_frame(k)
-            window.posing.set_pose(truth[k], "pose key")
-        window.animator.recompute()
-        if window.animator.animation is None:
-            raise RuntimeError(window.animator.status)
-        _wait(app, lambda: window.is_ready())
         from OpenGL import GL
 
         gl_view.makeCurrent()
@@ -133,6 +99,53 @@ def _measure() -> dict:
         f"({full[0][1]} mismatches)",
     ]
     return {"rows": rows, "notes": notes}
+
+
+def _gl_application():
+    """The QApplication, with OpenGL set up as app.main sets it up (RuntimeError without)."""
+    os.environ.setdefault("PYOPENGL_PLATFORM", "egl")  # as app.main: pyrender and the viewport
+    if os.environ["PYOPENGL_PLATFORM"] == "egl":
+        os.environ.setdefault("QT_XCB_GL_INTEGRATION", "xcb_egl")
+    from PySide6.QtCore import QCoreApplication
+    from PySide6.QtWidgets import QApplication
+
+    from app.widgets.skeleton_gl import opengl_available, share_gl_resources
+
+    share_gl_resources()
+    app = QApplication([])
+    QCoreApplication.setOrganizationName("GaitStudio")
+    QCoreApplication.setApplicationName("Gait Studio")
+    if not opengl_available():
+        raise RuntimeError(f"no OpenGL widget on Qt platform {app.platformName()!r}")
+    return app
+
+
+def _posed_demo(app, recovery_dir: Path):
+    """The main window on the demo, its keys posed from the true gait and animated, showing
+    the footage and the viewport side by side and nothing else."""
+    from app.demo import DEMO_GAIT, demo_folder, demo_project
+    from app.dialogs import HeadlessAsker
+    from app.main_window import MainWindow
+    from gaitcore.bench import generate_gait
+
+    project = demo_project(demo_folder())
+    window = MainWindow(asker=HeadlessAsker(), recovery_dir=recovery_dir, remember_layout=False)
+    for key in ("posing", "eigen", "pcs", "diagnosis"):
+        window.docks[key].hide()
+    window.viewport.gl_container.setFixedSize(*VIEWPORT)
+    window.resize(1500, 980)
+    window.show()
+    window.documents.open_demo(project)
+    _wait(app, lambda: window.is_ready() and window.state.analysis is not None)
+    truth = generate_gait(window.state.skeleton, DEMO_GAIT, window.state.n_frames)
+    for k in window.state.analysis.key_frames:
+        window.state.set_frame(k)
+        window.posing.set_pose(truth[k], "pose key")
+    window.animator.recompute()
+    if window.animator.animation is None:
+        raise RuntimeError(window.animator.status)
+    _wait(app, lambda: window.is_ready())
+    return window
 
 
 def _throughput(window, *, with_3d: bool) -> tuple[list[float], int]:
