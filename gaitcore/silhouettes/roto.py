@@ -149,7 +149,7 @@ class RotoSegmentation:
         for a, b in zip(key_frames, key_frames[1:] + [self.n]):
             self._forward(a, min(b + 1, self.n), progress, done, total)
             if b < self.n:
-                self.keys[b] = self._key_cut(b, self._blend(b, a, b, key_frames_only=True))
+                self.keys[b] = self._key_cut(b, self._blend(b, a, b, key_frames_only=True).mask)
                 self._backward(b, a, progress, done, total)
 
     def correct(self, scribbles: Sequence[Scribble], progress: Progress | None = None
@@ -168,8 +168,7 @@ class RotoSegmentation:
         self.scribbles = self.scribbles + tuple(scribbles)
         lo, hi = self.n, 0
         for k in sorted({sc.frame for sc in scribbles}):
-            current = self.keys[k].mask if k in self.keys else self._final(k)
-            self.keys[k] = self._key_cut(k, current.astype(np.float32))
+            self.keys[k] = self._key_cut(k, self._final(k).mask.astype(np.float32))
             first, stop = self._repropagate(k, progress)
             lo, hi = min(lo, first), max(hi, stop)
         return lo, hi
@@ -206,7 +205,7 @@ class RotoSegmentation:
                 self._check_first_cut(self.keys[0].mask)
             elif k in self.corrected_frames:
                 prev = self._neighbours(k - 1)[0]
-                self.keys[k] = self._key_cut(k, self._blend(k, prev, k, key_frames_only=True))
+                self.keys[k] = self._key_cut(k, self._blend(k, prev, k, key_frames_only=True).mask)
             else:
                 del self.keys[k]
             first, stop = self._repropagate(k, progress)
@@ -215,20 +214,20 @@ class RotoSegmentation:
 
     def mask(self, t: int) -> np.ndarray:
         """Frame ``t``'s silhouette at the source size, (rows, cols) bool."""
-        return self.work.enlarge(self._final(t))
+        return self.work.enlarge(self._final(t).mask)
 
     def state(self, t: int) -> FrameState:
         """Lost, corrected and confidence of frame ``t``."""
-        corrected = t in set(self.corrected_frames)
-        if t in self.keys:
-            area, conf = float(self.keys[t].mask.sum()), 1.0
-        else:
-            a, b = self._neighbours(t)
-            f, g = self.fwd.get(t), self.bwd.get(t) if b < self.n else None
-            w = 1.0 if g is None else 0.0 if f is None else self._weight(t, a, b)
-            conf = (w * f.confidence if f else 0.0) + ((1 - w) * g.confidence if g else 0.0)
-            area = float(self._final(t).sum())
-        return FrameState(area < self.s.lost_frac * self.key_area, corrected, round(conf, 3))
+        return self._state(t, self._final(t))
+
+    def frame(self, t: int) -> tuple[np.ndarray, FrameState]:
+        """:meth:`mask` and :meth:`state` of frame ``t``, its two passes blended once."""
+        cut = self._final(t)
+        return self.work.enlarge(cut.mask), self._state(t, cut)
+
+    def _state(self, t: int, cut: Cut) -> FrameState:
+        lost = float(cut.mask.sum()) < self.s.lost_frac * self.key_area
+        return FrameState(lost, t in set(self.corrected_frames), round(cut.confidence, 3))
 
     # -- key frames -------------------------------------------------------------------------
     def _subject_side(self) -> float:
@@ -427,11 +426,11 @@ class RotoSegmentation:
         b = min([k for k in keys if k > t], default=self.n)
         return a, b
 
-    def _final(self, t: int) -> np.ndarray:
+    def _final(self, t: int) -> Cut:
         if t in self.keys:
-            return self.keys[t].mask
+            return self.keys[t]
         a, b = self._neighbours(t)
-        return self._blend(t, a, b).astype(np.uint8)
+        return self._blend(t, a, b)
 
     def _weight(self, t: int, a: int, b: int) -> float:
         """The forward pass's share of frame ``t`` (``a < t < b``), in (0, 1).
@@ -452,17 +451,18 @@ class RotoSegmentation:
         union = float((mine | (end.mask > 0)).sum())
         return max(_DRIFT_FLOOR, 1.0 - float((mine & (end.mask > 0)).sum()) / max(union, 1.0))
 
-    def _blend(self, t: int, a: int, b: int, *, key_frames_only: bool = False) -> np.ndarray:
-        """Forward mask from key ``a`` and backward mask from key ``b`` at frame ``t``, mixed
-        by :meth:`_weight` (a probability in [0, 1] thresholded at one half)."""
+    def _blend(self, t: int, a: int, b: int, *, key_frames_only: bool = False) -> Cut:
+        """Forward cut from key ``a`` and backward cut from key ``b`` at frame ``t``, masks
+        and confidences mixed by :meth:`_weight` (masks as a probability in [0, 1]
+        thresholded at one half)."""
         f = self.fwd.get(t)
         g = None if key_frames_only or b >= self.n else self.bwd.get(t)
         if f is None or g is None:
-            return np.zeros(self.fwd.shape, np.uint8) if f is None and g is None else (f or g).mask
+            return f or g or Cut(np.zeros(self.fwd.shape, np.uint8), 0.0)
         w = self._weight(t, a, b)
         soft = (w * cv2.GaussianBlur(f.mask.astype(np.float32), (0, 0), 1.5)
                 + (1 - w) * cv2.GaussianBlur(g.mask.astype(np.float32), (0, 0), 1.5))
-        return (soft > 0.5).astype(np.uint8)
+        return Cut((soft > 0.5).astype(np.uint8), w * f.confidence + (1 - w) * g.confidence)
 
 
 def _union(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
@@ -494,5 +494,6 @@ def segment_roto(source, *, progress: Progress | None = None,
     seg.run(progress)
     if mask_sink is not None:
         for t in range(seg.n):
-            mask_sink(t, seg.mask(t).astype(np.uint8) * np.uint8(255), seg.state(t))
+            mask, state = seg.frame(t)
+            mask_sink(t, mask.astype(np.uint8) * np.uint8(255), state)
     return seg

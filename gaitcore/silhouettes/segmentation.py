@@ -218,14 +218,14 @@ def roto_frame(seg: RotoSegmentation, t: int
     """Frame ``t`` of a finished propagation as the ROI accumulator takes it: ``(crop, box,
     center_xy)`` of the whole mask (all its components: legs may come apart), None where the
     subject is lost; and what the segmentation says of the frame."""
-    mask = seg.mask(t)
-    state = seg.state(t)
+    mask, state = seg.frame(t)
     if state.lost or not mask.any():
         return None, state
     x, y, w, h = cv2.boundingRect(mask.astype(np.uint8))
-    m = cv2.moments(mask.astype(np.uint8), binaryImage=True)
-    return (mask[y : y + h, x : x + w], np.array([x, y, w, h]),
-            np.array([m["m10"] / m["m00"], m["m01"] / m["m00"]])), state
+    crop = mask[y : y + h, x : x + w]
+    m = cv2.moments(crop.astype(np.uint8), binaryImage=True)
+    return (crop, np.array([x, y, w, h]),
+            np.array([x + m["m10"] / m["m00"], y + m["m01"] / m["m00"]])), state
 
 
 def _stream(source) -> Iterable[np.ndarray]:
