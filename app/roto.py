@@ -146,17 +146,12 @@ class RotoController(QObject):
             self._documents.messageRaised.emit("re-propagating: the stroke follows when the "
                                                "running correction ends")
             return self._running
-        session, saved = self._session, self._opened_from
-
-        def work(progress):
-            use = resumed(session, source, project, saved=saved)
-            done = corrected(use, source, project, scribbles, progress)
-            return done, done.silhouettes()
-
         frames = sorted({sc.frame for sc in scribbles})
-        job = Job(work, f"Re-propagating the correction of frame {frames[0]}")
-        return self._start(job, project, lambda new: state.undo_stack.push(
-            AddScribblesCommand(state, scribbles, text, silhouettes=new)))
+        return self._repropagate(
+            f"Re-propagating the correction of frame {frames[0]}",
+            lambda use, progress: corrected(use, source, project, scribbles, progress),
+            lambda new: state.undo_stack.push(
+                AddScribblesCommand(state, scribbles, text, silhouettes=new)))
 
     def erase(self, indices: set[int]) -> Job | None:
         """Erase brush strokes (positions in the project's scribbles) as one undo step,
@@ -173,18 +168,27 @@ class RotoController(QObject):
             self._documents.messageRaised.emit("re-propagating: erase the stroke again when "
                                                "the running correction ends")
             return None
+        plural = "s" if len(indices) > 1 else ""
+        self._view.set_erasing(tuple(project.scribbles[i] for i in sorted(indices)))
+        return self._repropagate(
+            f"Re-propagating without the erased stroke{plural}",
+            lambda use, progress: erased(use, source, project, indices, progress),
+            lambda new: state.undo_stack.push(
+                EraseScribblesCommand(state, indices, silhouettes=new)))
+
+    def _repropagate(self, title: str, change, push) -> Job:
+        """Re-propagate the project's segmentation in a job: ``change(session, progress)``
+        edits the engine of the project (this session's, or the one saved beside the file
+        it was opened from; None when there is neither) and returns it; ``push(silhouettes)``
+        lands the result as one undo step."""
+        source, project = self._state.source, self._state.project
         session, saved = self._session, self._opened_from
 
         def work(progress):
-            done = erased(resumed(session, source, project, saved=saved), source, project,
-                          indices, progress)
+            done = change(resumed(session, source, project, saved=saved), progress)
             return done, done.silhouettes()
 
-        plural = "s" if len(indices) > 1 else ""
-        job = Job(work, f"Re-propagating without the erased stroke{plural}")
-        self._view.set_erasing(tuple(project.scribbles[i] for i in sorted(indices)))
-        return self._start(job, project, lambda new: state.undo_stack.push(
-            EraseScribblesCommand(state, indices, silhouettes=new)))
+        return self._start(Job(work, title), project, push)
 
     def _start(self, job: Job, project, push) -> Job:
         """Run a segmentation job; its result lands only on the project it was made for."""

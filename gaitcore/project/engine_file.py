@@ -38,7 +38,7 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 from gaitcore.footage.sources import FrameSource
 from gaitcore.project.document import Project
-from gaitcore.project.roto_session import RotoSession, segmentation_key
+from gaitcore.project.roto_session import RotoSession, reusable, segmentation_key
 from gaitcore.project.storage import array_file, sidecar_dir, write_array, write_atomic
 from gaitcore.schema import JsonValue, read_json, read_npy
 from gaitcore.silhouettes.packed_masks import PackedMasks
@@ -117,8 +117,9 @@ def resumed(session: RotoSession | None, source: FrameSource, project: Project, 
     :func:`~gaitcore.project.roto_session.corrected`: ``session`` back in the state matching
     ``project``, else the engine saved beside project file ``saved`` put back (the clip is not
     decoded); None when neither holds it (the clip must be segmented again)."""
-    if session is not None and session.source is source and session.restore(project):
-        return session
+    use = reusable(session, source, project)
+    if use is not None:
+        return use
     state = None if saved is None else read_engine(saved, engine_fingerprint(project))
     return None if state is None else RotoSession.from_state(source, project, state)
 

@@ -288,6 +288,15 @@ class RotoSession:
             self._saved.popitem(last=False)
 
 
+def reusable(session: RotoSession | None, source: FrameSource,
+             project: Project) -> RotoSession | None:
+    """``session``, back in ``project``'s state, when it segmented ``source`` and holds (or
+    kept) ``project``'s segmentation; None otherwise."""
+    if session is not None and session.source is source and session.restore(project):
+        return session
+    return None
+
+
 def corrected(session: RotoSession | None, source: FrameSource, project: Project,
               scribbles: Sequence[Scribble], progress: Progress | None = None) -> RotoSession:
     """``project``'s segmentation corrected by brush strokes ``scribbles``.
@@ -300,10 +309,11 @@ def corrected(session: RotoSession | None, source: FrameSource, project: Project
     RotoSession
         ``session`` itself or a new one; :meth:`RotoSession.silhouettes` gives the result.
     """
-    if session is not None and session.source is source and session.restore(project):
-        session.correct(project, scribbles, progress)
-        return session
-    return RotoSession.start(source, project.with_scribbles(tuple(scribbles)), progress)
+    use = reusable(session, source, project)
+    if use is None:
+        return RotoSession.start(source, project.with_scribbles(tuple(scribbles)), progress)
+    use.correct(project, scribbles, progress)
+    return use
 
 
 def erased(session: RotoSession | None, source: FrameSource, project: Project,
@@ -319,10 +329,11 @@ def erased(session: RotoSession | None, source: FrameSource, project: Project,
     RotoSession
         ``session`` itself or a new one; :meth:`RotoSession.silhouettes` gives the result.
     """
-    if session is not None and session.source is source and session.restore(project):
-        session.erase(project, indices, progress)
-        return session
-    return RotoSession.start(source, project.without_scribbles(indices), progress)
+    use = reusable(session, source, project)
+    if use is None:
+        return RotoSession.start(source, project.without_scribbles(indices), progress)
+    use.erase(project, indices, progress)
+    return use
 
 
 def preview_first_frame(source: FrameSource, project: Project,

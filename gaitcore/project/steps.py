@@ -38,9 +38,9 @@ from gaitcore.silhouettes.tracking import WORK_SIDE_PX, crop_rois
 
 __all__ = [
     "Animation", "CLAMP_RANGE", "CENTIMETRE_RIG_M", "alternates_in_use", "analyze",
-    "animate_project", "drag_library", "frame_rate", "frames_to_pose", "missing_poses", "open_source",
-    "read_rig", "rekey", "segment", "silhouettes_from_masks", "sketched_silhouettes",
-    "swap_warning_for", "check_segmentation_input",
+    "animate_project", "check_segmentation_input", "drag_library", "frame_rate",
+    "frames_to_pose", "missing_poses", "open_source", "read_rig", "rekey", "segment",
+    "silhouettes_from_masks", "sketched_silhouettes", "swap_warning_for",
 ]
 
 CLAMP_RANGE = (0.0, 1.0)
@@ -230,6 +230,7 @@ def drag_library(project: Project, skeleton: Skeleton, frame: int) -> PoseLibrar
     if not others:
         return library
     return library.with_poses(skeleton, np.array(others), f"{len(others)} other key(s) posed")
+
 
 # -- animation -------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
