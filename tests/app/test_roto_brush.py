@@ -157,6 +157,9 @@ def test_scribbles_and_masks_round_trip(qtbot, window, canter_clip, asker, tmp_p
     job = window.tools.roto.export_masks()
     with qtbot.waitSignal(job.succeeded, timeout=60_000):
         pass
+    # The export holds the engine until its `finished` lands, after `succeeded`: strokes
+    # imported before then wait for it (and come with the next job, not this one).
+    qtbot.waitUntil(lambda: not window.tools.roto.busy, timeout=60_000)
     masks = sorted((tmp_path / "out" / "masks").glob("*.png"))
     assert len(masks) == 100
     mask = cv2.imread(str(masks[30]), cv2.IMREAD_UNCHANGED)
