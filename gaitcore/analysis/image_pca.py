@@ -84,8 +84,9 @@ class ImagePCA:
         Notes
         -----
         Paper equations (1)-(5). The eigenvectors come from the smaller of the n x n Gram
-        matrix I I^T and the d x d covariance I^T I of the centred data matrix I (n x d). Clips larger than ``DENSE_LIMIT`` values (long clips) use
-        a randomized SVD streaming the frames in chunks, so memory does not grow with n x d.
+        matrix I I^T and the d x d covariance I^T I of the centred data matrix I (n x d).
+        Clips larger than ``DENSE_LIMIT`` values (long clips) use a randomized SVD streaming
+        the frames in chunks, so memory does not grow with n x d.
         """
         arr = np.asarray(images)
         _check_stack(arr)

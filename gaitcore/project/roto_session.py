@@ -309,11 +309,8 @@ def corrected(session: RotoSession | None, source: FrameSource, project: Project
     RotoSession
         ``session`` itself or a new one; :meth:`RotoSession.silhouettes` gives the result.
     """
-    use = reusable(session, source, project)
-    if use is None:
-        return RotoSession.start(source, project.with_scribbles(tuple(scribbles)), progress)
-    use.correct(project, scribbles, progress)
-    return use
+    return _changed(session, source, project, project.with_scribbles(tuple(scribbles)),
+                    lambda use: use.correct(project, scribbles, progress), progress)
 
 
 def erased(session: RotoSession | None, source: FrameSource, project: Project,
@@ -329,10 +326,18 @@ def erased(session: RotoSession | None, source: FrameSource, project: Project,
     RotoSession
         ``session`` itself or a new one; :meth:`RotoSession.silhouettes` gives the result.
     """
+    return _changed(session, source, project, project.without_scribbles(indices),
+                    lambda use: use.erase(project, indices, progress), progress)
+
+
+def _changed(session: RotoSession | None, source: FrameSource, project: Project, after: Project,
+             edit: Callable[[RotoSession], None], progress: Progress | None) -> RotoSession:
+    """``edit`` ``session`` from ``project``'s segmentation into ``after``'s when it holds (or
+    kept) the former; otherwise a new session segmenting the whole clip from ``after``."""
     use = reusable(session, source, project)
     if use is None:
-        return RotoSession.start(source, project.without_scribbles(indices), progress)
-    use.erase(project, indices, progress)
+        return RotoSession.start(source, after, progress)
+    edit(use)
     return use
 
 

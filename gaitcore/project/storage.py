@@ -153,7 +153,7 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
         roi = project.silhouettes.roi
         arrays = {
             "crops_packed": write_array(side, "crops_packed",
-                                         np.packbits(np.asarray(roi.crops, dtype=bool), axis=-1)),
+                                        np.packbits(np.asarray(roi.crops, dtype=bool), axis=-1)),
             "centers_xy": write_array(side, "centers_xy", np.asarray(roi.centers_xy, dtype=np.float64)),
             "lost": write_array(side, "lost", np.asarray(roi.lost, dtype=bool)),
         }
