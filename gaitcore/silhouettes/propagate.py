@@ -7,8 +7,11 @@ is brought to about ``subject_side_px`` pixels, enough to keep thin legs while s
   Kroeger et al. 2016), not shifted: each pixel looks up where it was in the previous frame.
 - It is then decided (:func:`fuse_cut`) from the colour models learnt on the key frame the mask
   came from (kept, so they cannot drift) and the warped mask as a soft prior, smoothed along
-  the image's edges: the mask follows legs and snaps to edges. Parts of it that drift away
-  from the body (background the flow carried along) are dropped.
+  the image's edges: the mask follows legs and snaps to edges. Where the flow is trusted (the
+  previous frame, warped by it, matches this one) the prior is sharp and strong, so a thin leg
+  the flow carried well is not given away to an ambiguous colour; elsewhere it is blurred and
+  weak, and colour decides. Parts of the mask that drift away from the body (background the
+  flow carried along) are dropped.
 - A result whose area jumps away from the warped mask's (a flood into the ground, or a
   collapse) is refused: the warped mask is kept and the frame marked as not confident. When
   the warped pixels stop looking like the subject it is lost, and searched for again in the
@@ -77,9 +80,14 @@ class PropagationSettings:
         Around a stroke, a band this many times its width takes the stroke's side in the
         prior of the corrected frame's cut (the strokes themselves are sure labels).
     prior_weight, prior_blur_frac, smooth_frac : float
-        How a propagated frame is decided (see :func:`fuse_cut`): weight of the warped mask
-        against colour, its blur and the guided filter's radius (fractions of the subject's
-        side).
+        How a propagated frame is decided (see :func:`fuse_cut`) where the flow is not
+        trusted: weight of the warped mask against colour, its blur and the guided filter's
+        radius (fractions of the subject's side).
+    trusted_prior_weight : float
+        Weight of the warped mask, barely blurred, where the flow is trusted.
+    trust_grey : float
+        The flow's trust at a pixel is exp(-(r / trust_grey)**2), with r the grey-level
+        difference between this frame and the previous one warped by the flow (blurred).
     """
 
     subject_side_px: int = 200
@@ -92,8 +100,10 @@ class PropagationSettings:
     max_shrink: float = 0.5
     lost_frac: float = 0.1
     motion_offsets: tuple[int, ...] = (1, 3, 6)
-    prior_weight: float = 1.0
+    prior_weight: float = 0.5
     prior_blur_frac: float = 0.03
+    trusted_prior_weight: float = 2.0
+    trust_grey: float = 12.0
     smooth_frac: float = 0.02
     first_scale: float = 1.5
     stroke_reach: float = 2.0
@@ -215,7 +225,7 @@ def disk(r: int) -> np.ndarray:
 
 def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
               flow_of: cv2.DISOpticalFlow, settings: PropagationSettings
-              ) -> tuple[np.ndarray, tuple[int, int, int, int]]:
+              ) -> tuple[np.ndarray, np.ndarray, tuple[int, int, int, int]]:
     """Carry the previous mask to this frame by dense optical flow.
 
     Parameters
@@ -231,6 +241,9 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
     -------
     prob : ndarray of shape (h, w), float32
         The warped mask in [0, 1] inside the window.
+    trust : ndarray of shape (h, w), float32
+        In (0, 1]: how well the previous frame warped by the same flow matches this one
+        (see ``trust_grey``); low where the flow is wrong (a fast leg, an occlusion).
     window : (x0, y0, x1, y1)
         Where ``prob`` lies in the frame: the mask's box grown by ``margin_frac``.
 
@@ -247,16 +260,20 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
     a = np.ascontiguousarray(grey[y0:y1, x0:x1])
     b = np.ascontiguousarray(grey_prev[y0:y1, x0:x1])
     if min(a.shape) < 16:
-        return mask[y0:y1, x0:x1].astype(np.float32), (x0, y0, x1, y1)
+        window = mask[y0:y1, x0:x1].astype(np.float32)
+        return window, np.zeros_like(window), (x0, y0, x1, y1)
     flow = flow_of.calc(a, b, None)
     gy, gx = np.mgrid[0 : y1 - y0, 0 : x1 - x0].astype(np.float32)
-    prob = cv2.remap(mask[y0:y1, x0:x1].astype(np.float32), gx + flow[..., 0],
-                     gy + flow[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-                     borderValue=0)
-    return cv2.GaussianBlur(prob, (0, 0), 1.0), (x0, y0, x1, y1)
+    map_x, map_y = gx + flow[..., 0], gy + flow[..., 1]
+    prob = cv2.remap(mask[y0:y1, x0:x1].astype(np.float32), map_x, map_y, cv2.INTER_LINEAR,
+                     borderMode=cv2.BORDER_CONSTANT, borderValue=0)
+    came = cv2.remap(b, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    residual = cv2.GaussianBlur(cv2.absdiff(came, a).astype(np.float32), (0, 0), 1.5)
+    trust = np.exp(-np.square(residual / settings.trust_grey))
+    return cv2.GaussianBlur(prob, (0, 0), 1.0), trust, (x0, y0, x1, y1)
 
 
-def fuse_cut(small: np.ndarray, prior: np.ndarray, colours: ColourTable,
+def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: ColourTable,
              settings: PropagationSettings) -> Cut:
     """Decide one window of a propagated frame from its colours and the warped mask.
 
@@ -266,6 +283,8 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, colours: ColourTable,
         The window of the frame at the working size.
     prior : ndarray of shape (h, w), float32
         The warped mask in [0, 1].
+    trust : ndarray of shape (h, w), float32
+        The flow's trust in [0, 1] (from :func:`warp_mask`).
     colours : ColourTable
         Learnt on the key frame the mask was carried from, and kept: what that frame (and the
         artist's strokes there) taught is not forgotten frame after frame, and cannot drift.
@@ -280,21 +299,26 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, colours: ColourTable,
 
     Notes
     -----
-    Per pixel, the evidence for "subject" is the colour log-likelihood ratio plus
-    ``prior_weight`` times the log-odds of the warped mask blurred by ``prior_blur_frac`` of
-    the subject's side (how far the flow may be wrong); a guided filter (He et al. 2013)
-    guided by the frame smooths it along the image's edges, and the sign decides. This
-    replaces the graph cut on propagated frames: every cue enters as a soft term (GrabCut
-    only takes hard labels), and it is several times faster.
+    Per pixel, the evidence for "subject" is the colour log-likelihood ratio plus the warped
+    mask's log-odds: ``trusted_prior_weight`` times those of the mask barely blurred (kept
+    within those of 0.1 and 0.9, so a strong colour can still turn a pixel the flow carried
+    wrong), where the flow is trusted, and ``prior_weight`` times those of the mask blurred by
+    ``prior_blur_frac`` of the subject's side (how far the flow may be wrong) where it is
+    not, mixed by the trust. A guided filter (He et al. 2013) guided by the frame smooths the
+    evidence along the image's edges, and the sign decides. This replaces the graph cut on
+    propagated frames: every cue enters as a soft term (GrabCut only takes hard labels), and
+    it is several times faster.
     """
     inside = (prior > 0.5).astype(np.uint8)
     if not inside.any():
         return Cut(inside, 0.0)
     _, _, w, h = cv2.boundingRect(inside)
     side = max(w, h)
-    p = cv2.GaussianBlur(prior, (0, 0), max(1.0, settings.prior_blur_frac * side))
-    p = np.clip(p, 0.02, 0.98)
-    evidence = colours(small) + settings.prior_weight * np.log(p / (1 - p))
+    loose = _log_odds(cv2.GaussianBlur(prior, (0, 0), max(1.0, settings.prior_blur_frac * side)),
+                      0.02)
+    sharp = _log_odds(cv2.GaussianBlur(prior, (0, 0), 1.0), 0.1)
+    evidence = (colours(small) + trust * (settings.trusted_prior_weight * sharp)
+                + (1 - trust) * (settings.prior_weight * loose))
     evidence = cv2.ximgproc.guidedFilter(np.ascontiguousarray(small), evidence,
                                          max(1, round(settings.smooth_frac * side)), 4.0)
     mask = keep_overlapping((evidence > 0).astype(np.uint8), inside, least=TOUCHING)
@@ -306,6 +330,12 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, colours: ColourTable,
         return Cut(inside, 0.0)
     agree = float((mask & inside).sum()) / max(float((mask | inside).sum()), 1.0)
     return Cut(mask, agree)
+
+
+def _log_odds(p: np.ndarray, floor: float) -> np.ndarray:
+    """log(p / (1 - p)) with p kept in [floor, 1 - floor]."""
+    p = np.clip(p, floor, 1 - floor)
+    return np.log(p / (1 - p))
 
 
 def _near_body(mask: np.ndarray, gap: int) -> np.ndarray:

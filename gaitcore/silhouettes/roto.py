@@ -413,8 +413,8 @@ class RotoSegmentation:
             return Cut(mask, 0.0)
         if mask.sum() < self.s.lost_frac * self.key_area:
             return Cut(find_again(small, models, self.key_area, self.s), 0.0)
-        prob, (x0, y0, x1, y1) = warp_mask(mask, grey_prev, grey, flow_of, self.s)
-        cut = fuse_cut(small[y0:y1, x0:x1], prob, models, self.s)
+        prob, trust, (x0, y0, x1, y1) = warp_mask(mask, grey_prev, grey, flow_of, self.s)
+        cut = fuse_cut(small[y0:y1, x0:x1], prob, trust, models, self.s)
         out = np.zeros_like(mask)
         out[y0:y1, x0:x1] = cut.mask
         return Cut(out, cut.confidence)

@@ -378,7 +378,7 @@ def test_a_part_carried_away_from_the_body_is_dropped_and_a_split_leg_kept():
     image[animal | (patch > 0)] = brown[animal | (patch > 0)]
     colours = learn_colours(image, (body | leg).astype(np.uint8))
     prior = (body | leg | patch).astype(np.float32)
-    cut = fuse_cut(image, prior, colours, PropagationSettings())
+    cut = fuse_cut(image, prior, np.ones_like(prior), colours, PropagationSettings())
     assert cut.mask[patch > 0].mean() < 0.05
     assert cut.mask[leg > 0].mean() > 0.9 and cut.mask[body > 0].mean() > 0.9
 
