@@ -383,6 +383,51 @@ def test_a_part_carried_away_from_the_body_is_dropped_and_a_split_leg_kept():
     assert cut.mask[leg > 0].mean() > 0.9 and cut.mask[body > 0].mean() > 0.9
 
 
+def test_the_flow_is_trusted_where_the_warped_frame_matches():
+    """A textured frame moved 3 pixels right, with one patch replaced by other texture (an
+    occlusion): the flow is trusted where the moved texture matches, not on the patch."""
+    from gaitcore.silhouettes.propagate import PropagationSettings, make_flow, warp_mask
+
+    rng = np.random.default_rng(5)
+    before = cv2.GaussianBlur(rng.integers(0, 255, (140, 180), np.uint8), (0, 0), 1.5)
+    after = np.roll(before, 3, axis=1)
+    after[40:70, 100:130] = cv2.GaussianBlur(rng.integers(0, 255, (30, 30), np.uint8), (0, 0), 1.5)
+    mask = np.zeros_like(before)
+    mask[50:90, 60:120] = 1
+    settings = PropagationSettings()
+    prob, trust, (x0, y0, x1, y1) = warp_mask(mask, before, after, make_flow(settings), settings)
+    assert prob.shape == trust.shape == (y1 - y0, x1 - x0)
+    assert np.median(trust[60:120, 20:70]) > 0.8  # moved texture, away from the patch
+    assert np.median(trust[45 - y0 : 65 - y0, 105 - x0 : 125 - x0]) < 0.3  # the patch
+
+
+def test_a_thin_leg_the_flow_carried_survives_an_ambiguous_colour():
+    """A leg six pixels wide whose colour lies halfway between the subject's and the
+    background's (the key frame taught it as background): where the flow is trusted the
+    warped mask keeps it; where it is not (the blurred prior of before this rule), colour and
+    blur give it away."""
+    from gaitcore.silhouettes.colour_model import learn_colours
+    from gaitcore.silhouettes.propagate import PropagationSettings, fuse_cut
+
+    rng = np.random.default_rng(4)
+    green, brown = np.array([60, 140, 70]), np.array([40, 80, 160])
+    image = np.clip(rng.normal(green, 8, (120, 160, 3)), 0, 255).astype(np.uint8)
+    body = np.zeros((120, 160), np.uint8)
+    cv2.ellipse(body, (80, 45), (45, 20), 0, 0, 360, 1, -1)
+    leg = np.zeros_like(body)
+    leg[60:105, 60:66] = 1
+    image[body > 0] = np.clip(rng.normal(brown, 8, (int(body.sum()), 3)), 0, 255)
+    image[leg > 0] = np.clip(rng.normal((green + brown) / 2, 8, (int(leg.sum()), 3)), 0, 255)
+    colours = learn_colours(image, body)
+    prior = cv2.GaussianBlur((body | leg).astype(np.float32), (0, 0), 1.0)
+    settings = PropagationSettings()
+    trusted = fuse_cut(image, prior, np.ones_like(prior), colours, settings)
+    untrusted = fuse_cut(image, prior, np.zeros_like(prior), colours, settings)
+    assert trusted.mask[leg > 0].mean() > 0.8
+    assert untrusted.mask[leg > 0].mean() < 0.3
+    assert trusted.mask[body > 0].mean() > 0.95
+
+
 def test_a_box_drawn_past_the_frame_keeps_to_what_moves(shared_data):
     """DAVIS bear boxed loosely (the reference box padded 30% runs past the frame's left and
     bottom edges, so no ground outside the box teaches the background's colours): the
