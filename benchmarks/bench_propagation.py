@@ -22,12 +22,12 @@ import numpy as np
 from benchmarks import Section
 from benchmarks.bench_segmentation import CLIPS, DATA, _davis, _r
 from gaitcore.bench.scripted_user import iou, legs_iou, padded_box
-from gaitcore.silhouettes.colour_model import learn_colours
 from gaitcore.silhouettes.propagate import (
     Cut,
     PropagationSettings,
     WorkingSize,
     fuse_cut,
+    key_colours,
     make_flow,
     warp_mask,
 )
@@ -78,10 +78,7 @@ def _carried(frames: list[np.ndarray], refs: list[np.ndarray], box, settings: Pr
     counts = np.zeros(REACH)
     for key in range(0, len(refs) - 1, SPACING):
         mask = work.shrink_mask(refs[key]).astype(np.uint8)
-        x, y, w, h = cv2.boundingRect(mask)
-        grow = int(settings.margin_frac * max(w, h)) + 8
-        win = (slice(max(0, y - grow), y + h + grow), slice(max(0, x - grow), x + w + grow))
-        colours = learn_colours(small[key][win], mask[win])
+        colours = key_colours(small[key], mask, settings)
         flow_of = make_flow(settings)
         for t in range(key + 1, min(key + REACH + 1, len(refs))):
             prob, trust, (x0, y0, x1, y1) = warp_mask(mask, grey[t - 1], grey[t], flow_of,

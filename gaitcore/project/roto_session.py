@@ -4,8 +4,8 @@
 correction on frame 57 wants only the frames around 57 cut again. A :class:`RotoSession`
 keeps the :class:`~gaitcore.silhouettes.roto.RotoSegmentation` of the last run and every
 frame's tight crop, so that a correction (or the erasing of one) re-propagates only up to the
-neighbouring corrected frames and rebuilds the project's :class:`~gaitcore.project.document.Silhouettes` from the
-crops it already has.
+neighbouring corrected frames and rebuilds the project's
+:class:`~gaitcore.project.document.Silhouettes` from the crops it already has.
 
 Undo puts back an older project; the session then no longer matches it. It keeps copies of
 its last few states, one per set of inputs (box, rectangles, brush strokes), and goes back to

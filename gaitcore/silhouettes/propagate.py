@@ -28,7 +28,7 @@ import cv2
 import numpy as np
 
 from gaitcore.errors import GaitInputError
-from gaitcore.silhouettes.colour_model import ColourTable
+from gaitcore.silhouettes.colour_model import ColourTable, learn_colours
 from gaitcore.silhouettes.tracking import keep_overlapping
 
 _PRESETS = {"ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST,
@@ -84,7 +84,7 @@ class PropagationSettings:
         trusted: weight of the warped mask against colour, its blur and the guided filter's
         radius (fractions of the subject's side).
     trusted_prior_weight : float
-        Weight of the warped mask, barely blurred, where the flow is trusted.
+        Weight of the warped mask, as warped (not blurred again), where the flow is trusted.
     trust_grey : float
         The flow's trust at a pixel is exp(-(r / trust_grey)**2), with r the grey-level
         difference between this frame and the previous one warped by the flow (blurred).
@@ -223,6 +223,25 @@ def disk(r: int) -> np.ndarray:
     return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
 
 
+def window(mask: np.ndarray, settings: PropagationSettings) -> tuple[int, int, int, int]:
+    """Where a frame is decided around a 0/1 mask (not empty): its box grown by
+    ``margin_frac`` of its longer side and 8 pixels, clipped to the frame, as (x0, y0, x1, y1)."""
+    rows, cols = mask.shape
+    x, y, w, h = cv2.boundingRect(mask)
+    grow = int(settings.margin_frac * max(w, h)) + 8
+    return max(0, x - grow), max(0, y - grow), min(cols, x + w + grow), min(rows, y + h + grow)
+
+
+def key_colours(small: np.ndarray, mask: np.ndarray,
+                settings: PropagationSettings) -> ColourTable | None:
+    """The colour models of a key frame (working size), learnt in the :func:`window` its
+    successors will be decided in; None for an empty mask."""
+    if not mask.any():
+        return None
+    x0, y0, x1, y1 = window(mask, settings)
+    return learn_colours(small[y0:y1, x0:x1], mask[y0:y1, x0:x1])
+
+
 def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
               flow_of: cv2.DISOpticalFlow, settings: PropagationSettings
               ) -> tuple[np.ndarray, np.ndarray, tuple[int, int, int, int]]:
@@ -252,16 +271,12 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
     Backward warping: the flow from this frame to the previous one tells each pixel where it
     came from, so the warped mask has no holes, and thin parts (legs) keep their width.
     """
-    rows, cols = mask.shape
-    x, y, w, h = cv2.boundingRect(mask)
-    grow = int(settings.margin_frac * max(w, h)) + 8
-    x0, y0 = max(0, x - grow), max(0, y - grow)
-    x1, y1 = min(cols, x + w + grow), min(rows, y + h + grow)
+    x0, y0, x1, y1 = window(mask, settings)
     a = np.ascontiguousarray(grey[y0:y1, x0:x1])
     b = np.ascontiguousarray(grey_prev[y0:y1, x0:x1])
     if min(a.shape) < 16:
-        window = mask[y0:y1, x0:x1].astype(np.float32)
-        return window, np.zeros_like(window), (x0, y0, x1, y1)
+        held = mask[y0:y1, x0:x1].astype(np.float32)
+        return held, np.zeros_like(held), (x0, y0, x1, y1)
     flow = flow_of.calc(a, b, None)
     gy, gx = np.mgrid[0 : y1 - y0, 0 : x1 - x0].astype(np.float32)
     map_x, map_y = gx + flow[..., 0], gy + flow[..., 1]
@@ -300,7 +315,7 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
     Notes
     -----
     Per pixel, the evidence for "subject" is the colour log-likelihood ratio plus the warped
-    mask's log-odds: ``trusted_prior_weight`` times those of the mask barely blurred (kept
+    mask's log-odds: ``trusted_prior_weight`` times those of the mask as warped (kept
     within those of 0.1 and 0.9, so a strong colour can still turn a pixel the flow carried
     wrong), where the flow is trusted, and ``prior_weight`` times those of the mask blurred by
     ``prior_blur_frac`` of the subject's side (how far the flow may be wrong) where it is
@@ -316,7 +331,7 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
     side = max(w, h)
     loose = _log_odds(cv2.GaussianBlur(prior, (0, 0), max(1.0, settings.prior_blur_frac * side)),
                       0.02)
-    sharp = _log_odds(cv2.GaussianBlur(prior, (0, 0), 1.0), 0.1)
+    sharp = _log_odds(prior, 0.1)
     evidence = (colours(small) + trust * (settings.trusted_prior_weight * sharp)
                 + (1 - trust) * (settings.prior_weight * loose))
     evidence = cv2.ximgproc.guidedFilter(np.ascontiguousarray(small), evidence,

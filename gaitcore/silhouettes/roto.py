@@ -26,7 +26,7 @@ import numpy as np
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Progress, report
 from gaitcore.silhouettes.annotations import Rect, Scribble, check_scribbles, check_start
-from gaitcore.silhouettes.colour_model import ColourModel, check_frame, learn_colours, rect_mask
+from gaitcore.silhouettes.colour_model import ColourModel, check_frame, rect_mask
 from gaitcore.silhouettes.keyframe import (
     cut_first,
     cut_with_prior,
@@ -41,6 +41,7 @@ from gaitcore.silhouettes.propagate import (
     WorkingSize,
     find_again,
     fuse_cut,
+    key_colours,
     make_flow,
     warp_mask,
 )
@@ -389,7 +390,7 @@ class RotoSegmentation:
         for t, small in frames:
             grey = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
             if t == key:
-                models = self._models(small, mask)
+                models = key_colours(small, mask, self.s)
             else:
                 cut = self._step(mask, grey_prev, small, grey, flow_of, models)
                 store.put(t, cut)
@@ -397,16 +398,6 @@ class RotoSegmentation:
                 done[0] += 1
                 report(progress, done[0], max(total, done[0]), "segmentation cancelled")
             grey_prev = grey
-
-    def _models(self, small: np.ndarray, mask: np.ndarray):
-        """Colour mixtures of a key frame, learnt in the window its successors will use."""
-        if not mask.any():
-            return None
-        x, y, w, h = cv2.boundingRect(mask)
-        grow = int(self.s.margin_frac * max(w, h)) + 8
-        x0, y0 = max(0, x - grow), max(0, y - grow)
-        return learn_colours(small[y0 : y + h + grow, x0 : x + w + grow],
-                             mask[y0 : y + h + grow, x0 : x + w + grow])
 
     def _step(self, mask, grey_prev, small, grey, flow_of, models) -> Cut:
         if models is None:
