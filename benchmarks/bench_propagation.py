@@ -35,8 +35,8 @@ from gaitcore.silhouettes.propagate import (
 SPACING, REACH = 5, 10
 RULES: dict[str, PropagationSettings] = {
     "default (the flow trusted where the warped frame matches)": PropagationSettings(),
-    "before: warped mask blurred, weight 1, everywhere":
-        PropagationSettings(prior_weight=1.0, trust_grey=1e-3),
+    "before: the flow trusted nowhere (warped mask blurred, weight 1, everywhere)":
+        PropagationSettings(trust_grey=1e-3),
 }
 
 

@@ -82,7 +82,8 @@ class PropagationSettings:
     prior_weight, prior_blur_frac, smooth_frac : float
         How a propagated frame is decided (see :func:`fuse_cut`) where the flow is not
         trusted: weight of the warped mask against colour, its blur and the guided filter's
-        radius (fractions of the subject's side).
+        radius (fractions of the subject's side). A weight under 1 there let colour punch
+        holes in the striped fur of Muybridge's cat, whose plates the flow cannot follow.
     trusted_prior_weight : float
         Weight of the warped mask, as warped (not blurred again), where the flow is trusted.
     trust_grey : float
@@ -100,7 +101,7 @@ class PropagationSettings:
     max_shrink: float = 0.5
     lost_frac: float = 0.1
     motion_offsets: tuple[int, ...] = (1, 3, 6)
-    prior_weight: float = 0.5
+    prior_weight: float = 1.0
     prior_blur_frac: float = 0.03
     trusted_prior_weight: float = 2.0
     trust_grey: float = 12.0
