@@ -118,15 +118,22 @@ class AddScribblesCommand(ProjectCommand):
 
 class EraseScribblesCommand(ProjectCommand):
     """Remove the brush strokes at positions ``indices`` of ``project.scribbles``; with
-    ``silhouettes``, the segmentation re-propagated without them too (one undo step: undo
-    puts back both the strokes and the silhouettes)."""
+    ``silhouettes``, the segmentation re-propagated without them too, and with ``strokes``
+    the sketch strokes the same eraser drag went over, those still in the project (one undo
+    step: undo puts back the strokes, the sketch and the silhouettes)."""
 
     def __init__(self, state: AppState, indices: set[int], *,
-                 silhouettes: Silhouettes | None = None) -> None:
-        after = state.project.without_scribbles(indices)
+                 silhouettes: Silhouettes | None = None,
+                 strokes: tuple[Stroke, ...] = ()) -> None:
+        project = state.project
+        sketch = {i for i, s in enumerate(project.strokes) if any(s is g for g in strokes)}
+        after = project.without_scribbles(indices).without_strokes(sketch)
         if silhouettes is not None:
             after = replace(after, silhouettes=silhouettes)
         text = "erase brush stroke" if len(indices) == 1 else f"erase {len(indices)} brush strokes"
+        if sketch:
+            text += " and " + ("a sketch stroke" if len(sketch) == 1
+                               else f"{len(sketch)} sketch strokes")
         frame = state.project.scribbles[min(indices)].frame if indices else None
         super().__init__(state, after, text, frame=frame)
 

@@ -39,7 +39,7 @@ from gaitcore.project.roto_session import (
     sketch_as_scribbles,
 )
 from gaitcore.project.steps import check_segmentation_input
-from gaitcore.silhouettes.annotations import Scribble, check_scribbles
+from gaitcore.silhouettes.annotations import Scribble, Stroke, check_scribbles
 
 SCRIBBLES_FILTER = "Scribbles (*.json)"
 
@@ -153,28 +153,29 @@ class RotoController(QObject):
             lambda new: state.undo_stack.push(
                 AddScribblesCommand(state, scribbles, text, silhouettes=new)))
 
-    def erase(self, indices: set[int]) -> Job | None:
-        """Erase brush strokes (positions in the project's scribbles) as one undo step,
-        re-propagating without them when the clip is segmented; refused while a correction
-        runs (the strokes' positions would change under it)."""
+    def erase(self, indices: set[int], strokes: tuple[Stroke, ...] = ()) -> Job | None:
+        """Erase brush strokes (positions in the project's scribbles), and the sketch
+        ``strokes`` the same eraser drag went over, as one undo step, re-propagating without
+        them when the clip is segmented; refused while a correction runs (the strokes'
+        positions would change under it)."""
         state, project, source = self._state, self._state.project, self._state.source
         if not indices:
             return None
         sil = project.silhouettes
         if source is None or sil is None or sil.origin != "segmented":
-            state.undo_stack.push(EraseScribblesCommand(state, indices))
+            state.undo_stack.push(EraseScribblesCommand(state, indices, strokes=strokes))
             return None
         if self._running is not None:
             self._documents.messageRaised.emit("re-propagating: erase the stroke again when "
                                                "the running correction ends")
             return None
         plural = "s" if len(indices) > 1 else ""
-        self._view.set_erasing(tuple(project.scribbles[i] for i in sorted(indices)))
+        self._view.set_erasing(tuple(project.scribbles[i] for i in sorted(indices)), strokes)
         return self._repropagate(
             f"Re-propagating without the erased stroke{plural}",
             lambda use, progress: erased(use, source, project, indices, progress),
             lambda new: state.undo_stack.push(
-                EraseScribblesCommand(state, indices, silhouettes=new)))
+                EraseScribblesCommand(state, indices, silhouettes=new, strokes=strokes)))
 
     def _repropagate(self, title: str, change, push) -> Job:
         """Re-propagate the project's segmentation in a job: ``change(session, progress)``

@@ -74,15 +74,16 @@ class FrameView(QWidget):
     scribblePainted(Scribble)
         A subject or background brush stroke was painted on the current frame (the tools
         decide whether it re-propagates the segmentation).
-    scribblesErased(set)
+    scribblesErased(set, tuple)
         The eraser went over brush strokes of the current frame: their positions in the
-        project's scribbles (the tools remove them and re-propagate).
+        project's scribbles, and the sketch strokes the same drag went over (the tools remove
+        both as one undo step and re-propagate).
     """
 
     frameShown = Signal(int)
     messageRaised = Signal(str)
     scribblePainted = Signal(object)
-    scribblesErased = Signal(object)
+    scribblesErased = Signal(object, object)
 
     def __init__(self, state: AppState, loader: FrameLoader, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -109,6 +110,7 @@ class FrameView(QWidget):
         self._erasing_brush: set[int] = set()  # brush strokes under the eraser
         self._pending: tuple[Scribble, ...] = ()
         self._pending_erase: tuple[Scribble, ...] = ()
+        self._pending_erase_strokes: set[int] = set()  # ids of sketch strokes erased with them
         self._preview: np.ndarray | None = None
         self._shown = -1
         self._size: tuple[int, int] | None = None
@@ -150,9 +152,12 @@ class FrameView(QWidget):
         self._pending = tuple(scribbles)
         self._draw_overlays()
 
-    def set_erasing(self, scribbles: tuple[Scribble, ...]) -> None:
-        """Brush strokes of the project being erased, drawn red (their job is running)."""
+    def set_erasing(self, scribbles: tuple[Scribble, ...], strokes: tuple[Stroke, ...] = ()
+                    ) -> None:
+        """Brush strokes of the project being erased, and sketch strokes erased with them,
+        drawn red (their job is running)."""
         self._pending_erase = tuple(scribbles)
+        self._pending_erase_strokes = {id(s) for s in strokes}
         self._draw_overlays()
 
     def set_preview(self, mask: np.ndarray | None) -> None:
@@ -217,7 +222,8 @@ class FrameView(QWidget):
                 self._add_overlay(_path_item(s.points_xy, s.width_px, ONION_COLOUR), 3)
         for i, s in enumerate(project.strokes):
             if s.frame == frame:
-                colour = ERASE_COLOUR if i in self._erasing else STROKE_COLOUR
+                erasing = i in self._erasing or id(s) in self._pending_erase_strokes
+                colour = ERASE_COLOUR if erasing else STROKE_COLOUR
                 self._add_overlay(_path_item(s.points_xy, s.width_px, colour), 4)
         for i, sc in enumerate(project.scribbles):
             if sc.frame == frame:
@@ -327,18 +333,20 @@ class FrameView(QWidget):
         self._state.undo_stack.push(AddStrokesCommand(self._state, [stroke]))
 
     def _erase(self, frame: int, xy: np.ndarray, finished: bool) -> None:
-        """Strokes and brush strokes under the eraser turn red; on release the strokes are
-        erased (one undo step) and the brush strokes handed to the tools."""
+        """Strokes and brush strokes under the eraser turn red; on release they are erased as
+        one undo step: by the tools when the drag went over brush strokes (their erasing may
+        re-propagate the segmentation), here otherwise."""
         project = self._state.project
         hits = self._erasing | project.strokes_hit(frame, xy, _ERASE_RADIUS_PX)
         brush = self._erasing_brush | project.scribbles_hit(frame, xy, _ERASE_RADIUS_PX)
         if finished:
             self._erasing, self._erasing_brush = set(), set()
             self._draw_overlays()
-            if hits:
-                self._state.undo_stack.push(EraseStrokesCommand(self._state, hits))
             if brush:
-                self.scribblesErased.emit(brush)
+                strokes = project.strokes
+                self.scribblesErased.emit(brush, tuple(strokes[i] for i in sorted(hits)))
+            elif hits:
+                self._state.undo_stack.push(EraseStrokesCommand(self._state, hits))
         elif (hits, brush) != (self._erasing, self._erasing_brush):
             self._erasing, self._erasing_brush = hits, brush
             self._draw_overlays()

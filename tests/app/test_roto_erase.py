@@ -53,22 +53,28 @@ def test_erasing_a_brush_stroke_repropagates_without_it_as_one_undo_step(
     window.viewport.hide()
     qtbot.wait(200)
     wait_ready(qtbot, window)
+    choose_tool(window, Tool.DRAW)
+    drag(qtbot, window, [(262, 50), (262, 95)])  # a sketch stroke the eraser will cross too
+    sketched = window.state.project
+    assert len(sketched.strokes) == 1 and stack.count() == steps + 1
     choose_tool(window, Tool.ERASE)
     red = _erase_showing(qtbot, window, ACROSS_HEAD_30, artifacts_dir / "app_erase_brush.png")
-    assert red == 1  # the brush stroke under the eraser, highlighted
-    assert window.tools.roto.busy and _red_paths(window) == 1  # and until the job lands
+    assert red == 2  # the brush stroke and the sketch stroke under the eraser, highlighted
+    assert window.tools.roto.busy and _red_paths(window) == 2  # and until the job lands
+    assert window.state.project.strokes == sketched.strokes  # erased when the job lands
     assert window.tools.roto.erase({0}) is None  # one correction at a time
     qtbot.waitUntil(lambda: not window.tools.roto.busy, timeout=60_000)
     wait_ready(qtbot, window)
     erased = window.state.project
-    assert erased.scribbles == () and stack.count() == steps + 1
-    assert stack.undoText() == "erase brush stroke"
+    assert erased.scribbles == () and erased.strokes == ()
+    assert stack.count() == steps + 2  # the sketch stroke, then the drag that erased both
+    assert stack.undoText() == "erase brush stroke and a sketch stroke"
     # The re-propagation without the stroke gives back the segmentation before it.
     assert erased.silhouettes == segmented.silhouettes
     first, stop = window.tools.roto.session.changed
     assert first <= 30 < stop and _red_paths(window) == 0
-    stack.undo()  # the stroke and its silhouettes together
-    assert window.state.project == painted
+    stack.undo()  # the strokes and the silhouettes together
+    assert window.state.project == sketched
     stack.redo()
     assert window.state.project == erased
     stack.undo()
@@ -81,7 +87,7 @@ def test_erasing_before_segmenting_takes_back_the_stroke_and_the_sketch(qtbot, w
                                                                          canter_clip):
     """On a clip not segmented yet the eraser removes brush strokes at once (the first
     frame's cut-out follows); one drag over a sketch stroke and a brush stroke is one undo
-    step for each."""
+    step."""
     window.open_path(canter_clip / "images")
     wait_ready(qtbot, window)
     choose_tool(window, Tool.BOX)
@@ -98,10 +104,10 @@ def test_erasing_before_segmenting_takes_back_the_stroke_and_the_sketch(qtbot, w
     assert _erase_showing(qtbot, window, [(250, 72), (262, 72), (274, 72)]) == 2
     project = window.state.project
     assert project.scribbles == () and project.strokes == ()
-    assert window.state.undo_stack.count() == steps + 2
+    assert window.state.undo_stack.count() == steps + 1
+    assert window.state.undo_stack.undoText() == "erase brush stroke and a sketch stroke"
     qtbot.waitUntil(lambda: window.frame_view.preview.sum() == cut.sum(), timeout=20_000)
     window.state.undo_stack.undo()
-    assert len(window.state.project.scribbles) == 1 and window.state.project.strokes == ()
+    project = window.state.project
+    assert len(project.scribbles) == 1 and len(project.strokes) == 1
     qtbot.waitUntil(lambda: window.frame_view.preview.sum() < cut.sum(), timeout=20_000)
-    window.state.undo_stack.undo()
-    assert len(window.state.project.strokes) == 1
