@@ -39,6 +39,7 @@ from gaitcore.silhouettes.propagate import (
     Cut,
     PropagationSettings,
     WorkingSize,
+    disk,
     find_again,
     fuse_cut,
     key_colours,
@@ -319,19 +320,29 @@ class RotoSegmentation:
 
     def _key_cut(self, t: int, prior: np.ndarray) -> Cut:
         """Cut a corrected frame: its strokes are sure labels, and the prior around them takes
-        their side (a stroke painted over a wrong region turns the region, not a line)."""
+        their side (a stroke painted over a wrong region turns the region, not a line); the
+        cut is kept within ``stroke_zone_frac`` of the subject's side around them, the prior
+        elsewhere."""
         small = self.work.shrink(check_frame(self.source[t]))
         subject, background = self._stroke_masks(t)
         prior = prior.astype(np.float32)
+        before = (prior > 0.5).astype(np.uint8)
+        near = np.zeros(prior.shape, np.uint8)
         for label, value in (("subject", 1.0), ("background", 0.0)):
             mine = [sc for sc in self.scribbles if sc.frame == t and sc.label == label]
             if mine:
                 wide = [Scribble(sc.points_xy, sc.width_px * self.s.stroke_reach, t, label)
                         for sc in mine]
-                prior[self.work.shrink_mask(rasterize_strokes(wide, self.work.shape) > 0)] = value
+                band = self.work.shrink_mask(rasterize_strokes(wide, self.work.shape) > 0)
+                prior[band] = value
+                near[band] = 1
         cut = cut_with_prior(small, prior, subject=subject, background=background,
                              iters=self.s.first_iters, settings=self.s)
-        return Cut(cut.mask, 1.0)
+        if not near.any() or not before.any():
+            return Cut(cut.mask, 1.0)
+        _, _, w, h = cv2.boundingRect(before)
+        zone = cv2.dilate(near, disk(round(self.s.stroke_zone_frac * max(w, h)))) > 0
+        return Cut(np.where(zone, cut.mask, before).astype(np.uint8), 1.0)
 
     # -- propagation ------------------------------------------------------------------------
     def _repropagate(self, k: int, progress) -> tuple[int, int]:

@@ -444,3 +444,31 @@ def test_a_box_drawn_past_the_frame_keeps_to_what_moves(shared_data):
         seg.run()
         scores = [iou(seg.mask(t), refs[t]) for t in range(0, seg.n, 4)]
     assert np.mean(scores) > 0.5, np.mean(scores)
+
+
+def test_a_stroke_changes_its_frame_near_itself_only():
+    """A corrected frame whose mask holds a wrong strip of background along the top of its
+    box, far from the stroke painted at the bottom: the graph cut of the whole frame would
+    drop the strip too, but the correction keeps to the stroke's surroundings (unless the
+    zone is made to span the frame)."""
+    from gaitcore.silhouettes.propagate import PropagationSettings
+
+    frames, truth = scene(14)
+    results = {}
+    for zone in (0.1, 10.0):
+        seg = RotoSegmentation(frames, box=padded_box(truth[0]),
+                               settings=PropagationSettings(stroke_zone_frac=zone))
+        seg.run()
+        body = seg.work.shrink_mask(truth[7]).astype(np.uint8)
+        x, y, w, h = cv2.boundingRect(body)
+        strip = np.zeros_like(body)
+        strip[max(0, y - 4) : y, x : x + w] = 1  # background above the back, in the mask
+        stroke_y = (y + h - 2) / seg.work.scale  # along the bottom of the box, source pixels
+        seg.scribbles = (Scribble([[(x + w * 0.3) / seg.work.scale, stroke_y],
+                                   [(x + w * 0.7) / seg.work.scale, stroke_y]], 3, 7,
+                                  "subject"),)
+        results[zone] = seg._key_cut(7, (body | strip).astype(np.float32)).mask
+        far = results[zone][strip > 0]
+        assert far.size > 20
+    assert results[0.1][strip > 0].all()  # far from the stroke: as it was
+    assert results[10.0][strip > 0].mean() < 0.5  # the whole frame re-cut drops it
