@@ -126,7 +126,8 @@ class EraseScribblesCommand(ProjectCommand):
                  silhouettes: Silhouettes | None = None,
                  strokes: tuple[Stroke, ...] = ()) -> None:
         project = state.project
-        sketch = {i for i, s in enumerate(project.strokes) if any(s is g for g in strokes)}
+        gone = {id(s) for s in strokes}
+        sketch = {i for i, s in enumerate(project.strokes) if id(s) in gone}
         after = project.without_scribbles(indices).without_strokes(sketch)
         if silhouettes is not None:
             after = replace(after, silhouettes=silhouettes)

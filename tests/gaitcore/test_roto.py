@@ -467,8 +467,7 @@ def test_a_stroke_changes_its_frame_near_itself_only():
         seg.scribbles = (Scribble([[(x + w * 0.3) / seg.work.scale, stroke_y],
                                    [(x + w * 0.7) / seg.work.scale, stroke_y]], 3, 7,
                                   "subject"),)
+        assert strip.sum() > 20
         results[zone] = seg._key_cut(7, (body | strip).astype(np.float32)).mask
-        far = results[zone][strip > 0]
-        assert far.size > 20
     assert results[0.1][strip > 0].all()  # far from the stroke: as it was
     assert results[10.0][strip > 0].mean() < 0.5  # the whole frame re-cut drops it
