@@ -81,9 +81,9 @@ def _carried(frames: list[np.ndarray], refs: list[np.ndarray], box, settings: Pr
         colours = key_colours(small[key], mask, settings)
         flow_of = make_flow(settings)
         for t in range(key + 1, min(key + REACH + 1, len(refs))):
-            prob, trust, (x0, y0, x1, y1) = warp_mask(mask, grey[t - 1], grey[t], flow_of,
-                                                      settings)
-            cut = decide(small[t][y0:y1, x0:x1], prob, trust, colours, settings)
+            warp = warp_mask(mask, grey[t - 1], grey[t], flow_of, settings)
+            x0, y0, x1, y1 = warp.window
+            cut = decide(small[t][y0:y1, x0:x1], warp.prob, warp.trust, colours, settings)
             mask = np.zeros_like(mask)
             mask[y0:y1, x0:x1] = cut.mask
             full = work.enlarge(mask)

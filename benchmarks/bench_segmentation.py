@@ -4,6 +4,7 @@
   (the reference's bounding box padded 4%), and after one scripted stroke per 10 frames
   (:mod:`gaitcore.bench.scripted_user`); the same in the lower third of the reference box
   (the legs); the time of one re-propagation.
+- DAVIS with the exposure swelling twice (x1.4, x0.6): from one box, exposure matched or not.
 - The paper's rectangles on DAVIS bear: the paper's "gmm" method beside the default.
 - Muybridge's race horse through the whole ``gaitcore analyze``: usable (period 36 +- 1,
   r1 and r2 >= 0.8) from each of four sets of input a user could draw.
@@ -37,6 +38,7 @@ from gaitcore.cli import main as gaitcore_main
 from gaitcore.footage.image_folder import read_mask_folder
 from gaitcore.footage.sources import open_frames
 from gaitcore.silhouettes.annotations import Rect, Scribble
+from gaitcore.silhouettes.propagate import PropagationSettings
 from gaitcore.silhouettes.roto import RotoSegmentation
 from gaitcore.silhouettes.segmentation import segment_clip
 
@@ -67,8 +69,8 @@ LONG_FRAMES, LONG_W, LONG_H = 10_000, 640, 480
 
 def run() -> list[Section]:
     """All sections of this benchmark (real-footage rows are skipped when it is absent)."""
-    return [davis_from_box(), davis_loose_box(), davis_later_start(), paper_rectangles(),
-            muybridge_usable(), speed(), long_clip_memory()]
+    return [davis_from_box(), davis_loose_box(), davis_later_start(), davis_exposure(),
+            paper_rectangles(), muybridge_usable(), speed(), long_clip_memory()]
 
 
 def _davis(name: str):
@@ -143,6 +145,44 @@ def _davis_mean_iou(title: str, columns: list[str], cases: list[tuple[int, float
             seg.run()
             row.append(_r(np.mean([iou(seg.mask(t), refs[start + t]) for t in range(seg.n)])))
         rows.append(row)
+    return Section(title, headers, rows, [note])
+
+
+class _Exposed:
+    """A clip lit ``top`` times at the peaks of two swells (a camera's auto-exposure)."""
+
+    def __init__(self, source, n: int, top: float) -> None:
+        self.source, self.n = source, n
+        self.gains = 1 + (top - 1) * (0.5 - 0.5 * np.cos(4 * np.pi * np.arange(n) / n))
+
+    def __len__(self) -> int:
+        return self.n
+
+    def __getitem__(self, t: int) -> np.ndarray:
+        return np.clip(self.source[t] * self.gains[t], 0, 255).astype(np.uint8)
+
+
+def davis_exposure() -> Section:
+    tops = (1.4, 0.6)
+    headers = ["clip", "as shot", *(f"lit x{top}" for top in tops),
+               *(f"lit x{top}, exposure not matched" for top in tops)]
+    title = "DAVIS from one box, with the exposure swelling twice"
+    if not (DATA / "davis-bear").is_dir():
+        return Section(title, headers, [], [f"skipped: real footage not found at {DATA}"])
+    rows = []
+    for name in CLIPS:
+        source, refs = _davis(name)
+        row: list = [name]
+        for top, match in [(1.0, True), *((t, True) for t in tops), *((t, False) for t in tops)]:
+            seg = RotoSegmentation(_Exposed(source, len(refs), top), box=padded_box(refs[0]),
+                                   settings=PropagationSettings(match_exposure=match))
+            seg.run()
+            row.append(_r(np.mean([iou(seg.mask(t), refs[t]) for t in range(seg.n)])))
+        rows.append(row)
+    note = ("mean IoU from the box (padded 4%); every frame is multiplied by a gain that "
+            "rises from 1 to the given factor and back, twice over the clip (clipped to 255); "
+            "each propagated frame is brought back to its key frame's exposure, measured at "
+            "the points the optical flow pairs, before the key's colours judge it")
     return Section(title, headers, rows, [note])
 
 

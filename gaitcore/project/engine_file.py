@@ -47,7 +47,7 @@ from gaitcore.silhouettes.roto_state import RotoState
 from gaitcore.silhouettes.segmentation import SegmentationSettings
 
 ENGINE_FORMAT = "gaitstudio-engine"
-ENGINE_VERSION = 3
+ENGINE_VERSION = 4
 """Bump when the engine's arrays, or what the propagation makes of them, change: a file of
 another version is ignored (the clip is segmented again)."""
 ENGINE_FILE = "engine.json"

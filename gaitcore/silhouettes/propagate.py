@@ -95,6 +95,9 @@ class PropagationSettings:
     trust_grey : float
         The flow's trust at a pixel is exp(-(r / trust_grey)**2), with r the grey-level
         difference between this frame and the previous one warped by the flow (blurred).
+    match_exposure : bool
+        Bring each propagated frame back to its key frame's exposure before the key's colours
+        judge it (off only to measure what it brings).
     """
 
     subject_side_px: int = 200
@@ -116,6 +119,7 @@ class PropagationSettings:
     stroke_reach: float = 2.0
     stroke_zone_frac: float = 0.1
     part_gap_frac: float = 0.04
+    match_exposure: bool = True
 
     def __post_init__(self) -> None:
         if self.flow_preset not in _PRESETS:
@@ -250,9 +254,32 @@ def key_colours(small: np.ndarray, mask: np.ndarray,
     return learn_colours(small[y0:y1, x0:x1], mask[y0:y1, x0:x1])
 
 
+@dataclass(frozen=True)
+class Warp:
+    """The previous frame's mask carried to this frame (:func:`warp_mask`).
+
+    Attributes
+    ----------
+    prob : ndarray of shape (h, w), float32
+        The warped mask in [0, 1] inside the window.
+    trust : ndarray of shape (h, w), float32
+        In (0, 1]: how well the previous frame warped by the same flow matches this one
+        (see ``trust_grey``); low where the flow is wrong (a fast leg, an occlusion).
+    window : (x0, y0, x1, y1)
+        Where ``prob`` lies in the frame: the mask's box grown by ``margin_frac``.
+    exposure : float
+        This frame's brightness over the previous one's, at the same points of the scene
+        (1 when the camera's exposure held).
+    """
+
+    prob: np.ndarray
+    trust: np.ndarray
+    window: tuple[int, int, int, int]
+    exposure: float = 1.0
+
+
 def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
-              flow_of: cv2.DISOpticalFlow, settings: PropagationSettings
-              ) -> tuple[np.ndarray, np.ndarray, tuple[int, int, int, int]]:
+              flow_of: cv2.DISOpticalFlow, settings: PropagationSettings) -> Warp:
     """Carry the previous mask to this frame by dense optical flow.
 
     Parameters
@@ -266,34 +293,49 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
 
     Returns
     -------
-    prob : ndarray of shape (h, w), float32
-        The warped mask in [0, 1] inside the window.
-    trust : ndarray of shape (h, w), float32
-        In (0, 1]: how well the previous frame warped by the same flow matches this one
-        (see ``trust_grey``); low where the flow is wrong (a fast leg, an occlusion).
-    window : (x0, y0, x1, y1)
-        Where ``prob`` lies in the frame: the mask's box grown by ``margin_frac``.
+    Warp
 
     Notes
     -----
     Backward warping: the flow from this frame to the previous one tells each pixel where it
     came from, so the warped mask has no holes, and thin parts (legs) keep their width.
+
+    The exposure is the median ratio of this frame's grey levels to the previous frame's at
+    the points the flow pairs (neither clipped). DIS matches mean-normalised patches, so its
+    flow holds through a change of exposure; the trust compares the two frames after it.
     """
     x0, y0, x1, y1 = window(mask, settings)
     a = np.ascontiguousarray(grey[y0:y1, x0:x1])
     b = np.ascontiguousarray(grey_prev[y0:y1, x0:x1])
     if min(a.shape) < 16:
         held = mask[y0:y1, x0:x1].astype(np.float32)
-        return held, np.zeros_like(held), (x0, y0, x1, y1)
+        return Warp(held, np.zeros_like(held), (x0, y0, x1, y1))
     flow = flow_of.calc(a, b, None)
     gy, gx = np.mgrid[0 : y1 - y0, 0 : x1 - x0].astype(np.float32)
     map_x, map_y = gx + flow[..., 0], gy + flow[..., 1]
     prob = cv2.remap(mask[y0:y1, x0:x1].astype(np.float32), map_x, map_y, cv2.INTER_LINEAR,
                      borderMode=cv2.BORDER_CONSTANT, borderValue=0)
     came = cv2.remap(b, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    residual = cv2.GaussianBlur(cv2.absdiff(came, a).astype(np.float32), (0, 0), 1.5)
+    exposure = _exposure(came, a)
+    residual = cv2.GaussianBlur(np.abs(a - np.float32(exposure) * came), (0, 0), 1.5)
     trust = np.exp(-np.square(residual / settings.trust_grey))
-    return cv2.GaussianBlur(prob, (0, 0), 1.0), trust, (x0, y0, x1, y1)
+    return Warp(cv2.GaussianBlur(prob, (0, 0), 1.0), trust, (x0, y0, x1, y1), exposure)
+
+
+def _exposure(before: np.ndarray, after: np.ndarray) -> float:
+    """Median ratio of ``after`` to ``before`` (grey, same points) where neither is near
+    black or clipped; 1 when too few such points."""
+    ok = (before > 16) & (before < 240) & (after > 16) & (after < 240)
+    if ok.sum() < 64:
+        return 1.0
+    return float(np.exp(np.median(np.log(after[ok].astype(np.float32))
+                                  - np.log(before[ok].astype(np.float32)))))
+
+
+def exposed(small: np.ndarray, gain: float) -> np.ndarray:
+    """A frame's colours times ``gain`` (saturated): a frame brought back to its key frame's
+    exposure before the key's colours judge it."""
+    return small if gain == 1.0 else cv2.convertScaleAbs(small, alpha=gain)
 
 
 def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: ColourTable,

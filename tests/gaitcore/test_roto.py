@@ -395,7 +395,8 @@ def test_the_flow_is_trusted_where_the_warped_frame_matches():
     mask = np.zeros_like(before)
     mask[50:90, 60:120] = 1
     settings = PropagationSettings()
-    prob, trust, (x0, y0, x1, y1) = warp_mask(mask, before, after, make_flow(settings), settings)
+    warp = warp_mask(mask, before, after, make_flow(settings), settings)
+    prob, trust, (x0, y0, x1, y1) = warp.prob, warp.trust, warp.window
     assert prob.shape == trust.shape == (y1 - y0, x1 - x0)
     assert np.median(trust[60:120, 20:70]) > 0.8  # moved texture, away from the patch
     assert np.median(trust[45 - y0 : 65 - y0, 105 - x0 : 125 - x0]) < 0.3  # the patch
@@ -471,3 +472,51 @@ def test_a_stroke_changes_its_frame_near_itself_only():
         results[zone] = seg._key_cut(7, (body | strip).astype(np.float32)).mask
     assert results[0.1][strip > 0].all()  # far from the stroke: as it was
     assert results[10.0][strip > 0].mean() < 0.5  # the whole frame re-cut drops it
+
+
+def test_the_warp_measures_a_change_of_exposure_and_trusts_the_flow_through_it():
+    """A textured frame moved 3 pixels right and lit 1.3 times: the warp tells the change of
+    exposure, and the flow is still trusted on the moved texture (compared without the change,
+    every pixel would differ by a third of its level)."""
+    from gaitcore.silhouettes.propagate import PropagationSettings, make_flow, warp_mask
+
+    rng = np.random.default_rng(5)
+    before = cv2.GaussianBlur(rng.integers(40, 180, (140, 180), np.uint8), (0, 0), 1.5)
+    after = np.clip(np.roll(before, 3, axis=1) * 1.3, 0, 255).astype(np.uint8)
+    mask = np.zeros_like(before)
+    mask[50:90, 60:120] = 1
+    settings = PropagationSettings()
+    warp = warp_mask(mask, before, after, make_flow(settings), settings)
+    assert warp.exposure == pytest.approx(1.3, abs=0.03)
+    assert np.median(warp.trust) > 0.8
+    held = warp_mask(mask, before, np.roll(before, 3, axis=1), make_flow(settings), settings)
+    assert held.exposure == pytest.approx(1.0, abs=0.01)
+
+
+def test_a_frame_is_brought_back_to_its_key_exposure():
+    from gaitcore.silhouettes.propagate import exposed
+
+    frame = np.array([[[100, 120, 200], [255, 255, 255]]], np.uint8)
+    np.testing.assert_array_equal(exposed(frame, 0.5), [[[50, 60, 100], [128, 128, 128]]])
+    np.testing.assert_array_equal(exposed(frame, 1.5)[0, 0], [150, 180, 255])
+    assert exposed(frame, 1.0) is frame
+
+
+@pytest.mark.slow
+def test_a_clip_whose_exposure_swells_keeps_its_subject(shared_data):
+    """DAVIS goat lit 1.4 times at the top of two swells (a camera's auto-exposure): each
+    frame is brought back to its key frame's exposure before the key's colours judge it, so
+    the goat is kept (mean IoU 0.30 before, against 0.76 for the clip as shot)."""
+    from gaitcore.footage.image_folder import read_mask_folder
+    from gaitcore.footage.sources import open_frames
+
+    goat = shared_data / "davis-goat"
+    refs = [m > 0 for m in read_mask_folder(goat / "Annotations")]
+    with open_frames(goat / "JPEGImages") as source:
+        n = len(refs)
+        gains = 1 + 0.4 * (0.5 - 0.5 * np.cos(4 * np.pi * np.arange(n) / n))
+        lit = [np.clip(source[t] * gains[t], 0, 255).astype(np.uint8) for t in range(n)]
+    seg = RotoSegmentation(lit, box=padded_box(refs[0]))
+    seg.run()
+    scores = [iou(seg.mask(t), refs[t]) for t in range(n)]
+    assert np.mean(scores) > 0.65, np.mean(scores)
