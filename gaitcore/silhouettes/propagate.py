@@ -97,7 +97,14 @@ class PropagationSettings:
         difference between this frame and the previous one warped by the flow (blurred).
     match_exposure : bool
         Bring each propagated frame back to its key frame's exposure before the key's colours
-        judge it (off only to measure what it brings).
+        judge it (see :class:`ExposureTrack`; off only to measure what it brings).
+    exposure_pull : float
+        Each frame, the exposure followed from frame to frame is pulled this much (in log)
+        towards the background's level over the key frame's, so it cannot drift.
+    exposure_slack : float
+        Exposure changes up to this much (in log) are left to the colour models, and only the
+        rest is matched: between separate photographs (Muybridge's plates) the estimate is
+        only good to a few percent.
     """
 
     subject_side_px: int = 200
@@ -120,6 +127,8 @@ class PropagationSettings:
     stroke_zone_frac: float = 0.1
     part_gap_frac: float = 0.04
     match_exposure: bool = True
+    exposure_pull: float = 0.05
+    exposure_slack: float = 0.05
 
     def __post_init__(self) -> None:
         if self.flow_preset not in _PRESETS:
@@ -316,20 +325,77 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
     prob = cv2.remap(mask[y0:y1, x0:x1].astype(np.float32), map_x, map_y, cv2.INTER_LINEAR,
                      borderMode=cv2.BORDER_CONSTANT, borderValue=0)
     came = cv2.remap(b, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    exposure = _exposure(came, a)
+    exposure = _exposure(came, a, prob < 0.05, settings)
     residual = cv2.GaussianBlur(np.abs(a - np.float32(exposure) * came), (0, 0), 1.5)
     trust = np.exp(-np.square(residual / settings.trust_grey))
     return Warp(cv2.GaussianBlur(prob, (0, 0), 1.0), trust, (x0, y0, x1, y1), exposure)
 
 
-def _exposure(before: np.ndarray, after: np.ndarray) -> float:
-    """Median ratio of ``after`` to ``before`` (grey, same points) where neither is near
-    black or clipped; 1 when too few such points."""
-    ok = (before > 16) & (before < 240) & (after > 16) & (after < 240)
+def _exposure(before: np.ndarray, after: np.ndarray, background: np.ndarray,
+              settings: PropagationSettings) -> float:
+    """This frame's brightness over the previous one's: the median ratio of ``after`` to
+    ``before`` (grey, paired by the flow) on the background, where neither is near black or
+    clipped and the pair matches once the ratio is applied; 1 when under a quarter of the
+    pairs match (the flow paired different things: Muybridge's plates, a cut)."""
+    ok = background & (before > 16) & (before < 240) & (after > 16) & (after < 240)
     if ok.sum() < 64:
         return 1.0
-    return float(np.exp(np.median(np.log(after[ok].astype(np.float32))
-                                  - np.log(before[ok].astype(np.float32)))))
+    b, a = before[ok].astype(np.float32), after[ok].astype(np.float32)
+    ratio = np.log(a) - np.log(b)
+    gain = float(np.exp(np.median(ratio)))
+    same = np.abs(a - gain * b) < settings.trust_grey
+    if same.sum() < max(64, ok.sum() // 4):
+        return 1.0
+    return float(np.exp(np.median(ratio[same])))
+
+
+def _background_level(grey: np.ndarray, background: np.ndarray) -> float | None:
+    """Median grey level of the background pixels that are neither near black nor clipped;
+    None when too few."""
+    values = grey[background & (grey > 16) & (grey < 240)]
+    return float(np.median(values)) if values.size >= 64 else None
+
+
+class ExposureTrack:
+    """A frame's exposure over its key frame's, followed along one pass of the propagation.
+
+    Two estimates, as a complementary filter: the product of the frame-to-frame ratios
+    (:attr:`Warp.exposure`; exact from frame to frame, but it drifts over hundreds of frames)
+    pulled by ``exposure_pull`` towards the ratio of the background's median grey level to
+    the key frame's (it cannot drift, but the background's content changes it).
+
+    Parameters
+    ----------
+    grey : ndarray of shape (rows, cols), uint8
+        The key frame, grey, at the working size.
+    mask : ndarray of shape (rows, cols), uint8
+        Its 0/1 mask.
+    settings : PropagationSettings
+    """
+
+    def __init__(self, grey: np.ndarray, mask: np.ndarray, settings: PropagationSettings
+                 ) -> None:
+        self.settings = settings
+        self.level = None
+        if mask.any():
+            x0, y0, x1, y1 = window(mask, settings)
+            self.level = _background_level(grey[y0:y1, x0:x1], mask[y0:y1, x0:x1] == 0)
+        self.log_gain = 0.0
+
+    def step(self, warp: Warp, grey: np.ndarray) -> float:
+        """Follow the exposure to this frame (``grey``, the whole frame at the working size,
+        warped to by ``warp``); returns the gain that brings it back to the key frame's."""
+        s = self.settings
+        if not s.match_exposure:
+            return 1.0
+        self.log_gain += float(np.log(warp.exposure))
+        x0, y0, x1, y1 = warp.window
+        level = _background_level(grey[y0:y1, x0:x1], warp.prob < 0.05)
+        if self.level is not None and level is not None:
+            self.log_gain += s.exposure_pull * (float(np.log(level / self.level))
+                                                - self.log_gain)
+        matched = np.sign(self.log_gain) * max(0.0, abs(self.log_gain) - s.exposure_slack)
+        return float(np.exp(-matched))
 
 
 def exposed(small: np.ndarray, gain: float) -> np.ndarray:

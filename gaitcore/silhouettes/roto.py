@@ -37,6 +37,7 @@ from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import (
     TOUCHING,
     Cut,
+    ExposureTrack,
     PropagationSettings,
     WorkingSize,
     disk,
@@ -398,12 +399,12 @@ class RotoSegmentation:
     def _carry(self, mask: np.ndarray, key: int, frames, store: PackedMasks,
                progress, done, total) -> None:
         flow_of = make_flow(self.s)
-        grey_prev = models = None
-        exposure = [1.0]  # this frame's exposure over the key frame's
+        grey_prev = models = exposure = None
         for t, small in frames:
             grey = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
             if t == key:
                 models = key_colours(small, mask, self.s)
+                exposure = ExposureTrack(grey, mask, self.s)
             else:
                 cut = self._step(mask, grey_prev, small, grey, flow_of, models, exposure)
                 store.put(t, cut)
@@ -412,23 +413,20 @@ class RotoSegmentation:
                 report(progress, done[0], max(total, done[0]), "segmentation cancelled")
             grey_prev = grey
 
-    def _step(self, mask, grey_prev, small, grey, flow_of, models, exposure: list[float]
-              ) -> Cut:
-        """One propagated frame; ``exposure`` (its single item: the previous frame's exposure
-        over the key frame's) is updated with this frame's, and the frame is brought back to
-        the key's exposure before the key's colours judge it (a camera's auto-exposure, or
-        Muybridge's plates, each printed lighter or darker)."""
-        if models is None:
+    def _step(self, mask, grey_prev, small, grey, flow_of, models,
+              exposure: ExposureTrack | None) -> Cut:
+        """One propagated frame, brought back to its key frame's exposure (``exposure``
+        follows it) before the key's colours judge it: a camera's auto-exposure, or
+        Muybridge's plates, each printed lighter or darker."""
+        if models is None or exposure is None:
             return Cut(mask, 0.0)
         if mask.sum() < self.s.lost_frac * self.key_area:
-            return Cut(find_again(exposed(small, 1 / exposure[0]), models, self.key_area,
-                                  self.s), 0.0)
+            return Cut(find_again(small, models, self.key_area, self.s), 0.0)
         warp = warp_mask(mask, grey_prev, grey, flow_of, self.s)
-        if self.s.match_exposure:
-            exposure[0] *= warp.exposure
+        gain = exposure.step(warp, grey)
         x0, y0, x1, y1 = warp.window
-        cut = fuse_cut(exposed(small[y0:y1, x0:x1], 1 / exposure[0]), warp.prob, warp.trust,
-                       models, self.s)
+        cut = fuse_cut(exposed(small[y0:y1, x0:x1], gain), warp.prob, warp.trust, models,
+                       self.s)
         out = np.zeros_like(mask)
         out[y0:y1, x0:x1] = cut.mask
         return Cut(out, cut.confidence)

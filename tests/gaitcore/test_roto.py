@@ -502,11 +502,41 @@ def test_a_frame_is_brought_back_to_its_key_exposure():
     assert exposed(frame, 1.0) is frame
 
 
+def test_the_exposure_followed_along_a_pass_neither_drifts_nor_matches_small_changes():
+    """Frame-to-frame ratios 0.2% low every frame (an estimate between separate
+    photographs) while the background keeps its level: pulled towards that level, the
+    followed exposure stays within the slack, so nothing is matched (not pulled, it drifts). A frame lit 1.5 times
+    (its background too) is matched, less the slack."""
+    from gaitcore.silhouettes.propagate import ExposureTrack, PropagationSettings, Warp
+
+    rng = np.random.default_rng(2)
+    grey = rng.integers(60, 200, (120, 160)).astype(np.uint8)
+    mask = np.zeros_like(grey)
+    mask[40:80, 50:110] = 1
+    settings = PropagationSettings()
+    x0, y0, x1, y1 = 0, 0, 160, 120
+    prob = mask[y0:y1, x0:x1].astype(np.float32)
+
+    def biased(track):
+        return [track.step(Warp(prob, prob, (x0, y0, x1, y1), 0.998), grey) for _ in range(300)]
+
+    assert max(biased(ExposureTrack(grey, mask, settings))) == 1.0
+    assert biased(ExposureTrack(grey, mask, PropagationSettings(exposure_pull=0.0)))[-1] > 1.5
+
+    lit = np.clip(grey * 1.5, 0, 255).astype(np.uint8)
+    track = ExposureTrack(grey, mask, settings)
+    gain = track.step(Warp(prob, prob, (x0, y0, x1, y1), 1.5), lit)
+    assert gain == pytest.approx(np.exp(-(np.log(1.5) - settings.exposure_slack)), rel=0.02)
+    off = ExposureTrack(grey, mask, PropagationSettings(match_exposure=False))
+    assert off.step(Warp(prob, prob, (x0, y0, x1, y1), 1.5), lit) == 1.0
+
+
 @pytest.mark.slow
 def test_a_clip_whose_exposure_swells_keeps_its_subject(shared_data):
-    """DAVIS goat lit 1.4 times at the top of two swells (a camera's auto-exposure): each
-    frame is brought back to its key frame's exposure before the key's colours judge it, so
-    the goat is kept (mean IoU 0.30 before, against 0.76 for the clip as shot)."""
+    """DAVIS goat darkened to 0.6 times at the bottom of two swells (a camera's
+    auto-exposure, a passing cloud): each frame is brought back to its key frame's exposure
+    before the key's colours judge it, so the goat is kept (mean IoU 0.58 without, against
+    0.76 for the clip as shot)."""
     from gaitcore.footage.image_folder import read_mask_folder
     from gaitcore.footage.sources import open_frames
 
@@ -514,9 +544,9 @@ def test_a_clip_whose_exposure_swells_keeps_its_subject(shared_data):
     refs = [m > 0 for m in read_mask_folder(goat / "Annotations")]
     with open_frames(goat / "JPEGImages") as source:
         n = len(refs)
-        gains = 1 + 0.4 * (0.5 - 0.5 * np.cos(4 * np.pi * np.arange(n) / n))
+        gains = 1 - 0.4 * (0.5 - 0.5 * np.cos(4 * np.pi * np.arange(n) / n))
         lit = [np.clip(source[t] * gains[t], 0, 255).astype(np.uint8) for t in range(n)]
     seg = RotoSegmentation(lit, box=padded_box(refs[0]))
     seg.run()
     scores = [iou(seg.mask(t), refs[t]) for t in range(n)]
-    assert np.mean(scores) > 0.65, np.mean(scores)
+    assert np.mean(scores) > 0.7, np.mean(scores)
