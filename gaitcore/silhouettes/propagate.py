@@ -310,8 +310,9 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
     came from, so the warped mask has no holes, and thin parts (legs) keep their width.
 
     The exposure is the median ratio of this frame's grey levels to the previous frame's at
-    the points the flow pairs (neither clipped). DIS matches mean-normalised patches, so its
-    flow holds through a change of exposure; the trust compares the two frames after it.
+    the background's points the flow pairs (see :func:`_exposure`). DIS matches
+    mean-normalised patches, so its flow holds through a change of exposure; the trust
+    compares the two frames once the ratio is applied.
     """
     x0, y0, x1, y1 = window(mask, settings)
     a = np.ascontiguousarray(grey[y0:y1, x0:x1])
