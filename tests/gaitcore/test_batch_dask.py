@@ -109,7 +109,10 @@ def test_batch_on_a_scheduler_and_two_workers_started_apart(tmp_path):
 def test_interrupted_batch_resumes_without_computing_a_finished_clip_twice(tmp_path):
     manifest = _walker_library(tmp_path, n_clips=10, n_frames=240)
     out = tmp_path / "out"
-    run = _gaitcore("batch", str(manifest), "--out", str(out), "--workers", "1")
+    # Ctrl+C's default in the command, whatever this process inherited: a shell that starts
+    # a job in the background (xvfb-run under `make test &`) hands it SIGINT ignored.
+    run = _gaitcore("batch", str(manifest), "--out", str(out), "--workers", "1",
+                    preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline and len(list(out.glob(f"*/{RESULT_NAME}"))) < 2:
