@@ -27,6 +27,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
@@ -113,7 +114,7 @@ def davis_loose_box(pads: tuple[float, ...] = (0.04, 0.1, 0.2, 0.3)) -> Section:
     """How much the result depends on how loosely the box is drawn."""
     return _davis_mean_iou(
         "DAVIS from a looser box (mean IoU)", [f"box padded {round(100 * p)}%" for p in pads],
-        [(0, p) for p in pads],
+        [_Case(pad=p) for p in pads],
         "the reference mask's bounding box on frame 0 padded on each side by the share of its "
         "size shown, clipped to the frame (the dog's box runs past the frame's top from 10%, "
         "the bear's past its left and bottom edges at 30%); no strokes")
@@ -123,15 +124,39 @@ def davis_later_start(starts: tuple[int, ...] = (0, 15, 30)) -> Section:
     """The same clips cut to start later: another first frame, another box."""
     return _davis_mean_iou(
         "DAVIS from one box on a later first frame (mean IoU)",
-        [f"from frame {s}" for s in starts], [(s, 0.04) for s in starts],
+        [f"from frame {s}" for s in starts], [_Case(start=s) for s in starts],
         "the clip from that frame on, boxed there as in the first table (the reference's "
         "bounding box padded 4%); no strokes")
 
 
-def _davis_mean_iou(title: str, columns: list[str], cases: list[tuple[int, float]],
-                    note: str) -> Section:
-    """Mean IoU of each DAVIS clip segmented from one box, a column per (first frame, box
-    padding) case."""
+def davis_exposure(tops: tuple[float, ...] = (1.4, 0.6)) -> Section:
+    """The camera's exposure swelling during the clip, matched by the propagation or not."""
+    return _davis_mean_iou(
+        "DAVIS from one box, with the exposure swelling twice",
+        ["as shot", *(f"lit x{top}" for top in tops),
+         *(f"lit x{top}, exposure not matched" for top in tops)],
+        [_Case(), *(_Case(lit=top) for top in tops),
+         *(_Case(lit=top, match_exposure=False) for top in tops)],
+        "mean IoU from the box (padded 4%); every frame is multiplied by a gain that rises "
+        "from 1 to the given factor and back, twice over the clip (clipped to 255); each "
+        "propagated frame is brought back to its key frame's exposure, measured at the points "
+        "the optical flow pairs, before the key's colours judge it")
+
+
+@dataclass(frozen=True)
+class _Case:
+    """One column of :func:`_davis_mean_iou`: the clip from frame ``start``, boxed there
+    (the reference's bounding box padded by ``pad``), every frame multiplied by a gain that
+    swells twice up to ``lit``, segmented with or without ``match_exposure``."""
+
+    start: int = 0
+    pad: float = 0.04
+    lit: float = 1.0
+    match_exposure: bool = True
+
+
+def _davis_mean_iou(title: str, columns: list[str], cases: list[_Case], note: str) -> Section:
+    """Mean IoU of each DAVIS clip segmented from one box, a column per case."""
     headers = ["clip", *columns]
     if not (DATA / "davis-bear").is_dir():
         return Section(title, headers, [], [f"skipped: real footage not found at {DATA}"])
@@ -139,50 +164,18 @@ def _davis_mean_iou(title: str, columns: list[str], cases: list[tuple[int, float
     for name in CLIPS:
         source, refs = _davis(name)
         row: list = [name]
-        for start, pad in cases:
-            seg = RotoSegmentation([source[t] for t in range(start, len(refs))],
-                                   box=padded_box(refs[start], pad))
+        for case in cases:
+            gains = 1 + (case.lit - 1) * (0.5 - 0.5 * np.cos(4 * np.pi * np.arange(len(refs))
+                                                             / len(refs)))
+            frames = [np.clip(source[t] * gains[t], 0, 255).astype(np.uint8)
+                      if case.lit != 1.0 else source[t] for t in range(case.start, len(refs))]
+            seg = RotoSegmentation(frames, box=padded_box(refs[case.start], case.pad),
+                                   settings=PropagationSettings(
+                                       match_exposure=case.match_exposure))
             seg.run()
-            row.append(_r(np.mean([iou(seg.mask(t), refs[start + t]) for t in range(seg.n)])))
+            row.append(_r(np.mean([iou(seg.mask(t), refs[case.start + t])
+                                   for t in range(seg.n)])))
         rows.append(row)
-    return Section(title, headers, rows, [note])
-
-
-class _Exposed:
-    """A clip lit ``top`` times at the peaks of two swells (a camera's auto-exposure)."""
-
-    def __init__(self, source, n: int, top: float) -> None:
-        self.source, self.n = source, n
-        self.gains = 1 + (top - 1) * (0.5 - 0.5 * np.cos(4 * np.pi * np.arange(n) / n))
-
-    def __len__(self) -> int:
-        return self.n
-
-    def __getitem__(self, t: int) -> np.ndarray:
-        return np.clip(self.source[t] * self.gains[t], 0, 255).astype(np.uint8)
-
-
-def davis_exposure() -> Section:
-    tops = (1.4, 0.6)
-    headers = ["clip", "as shot", *(f"lit x{top}" for top in tops),
-               *(f"lit x{top}, exposure not matched" for top in tops)]
-    title = "DAVIS from one box, with the exposure swelling twice"
-    if not (DATA / "davis-bear").is_dir():
-        return Section(title, headers, [], [f"skipped: real footage not found at {DATA}"])
-    rows = []
-    for name in CLIPS:
-        source, refs = _davis(name)
-        row: list = [name]
-        for top, match in [(1.0, True), *((t, True) for t in tops), *((t, False) for t in tops)]:
-            seg = RotoSegmentation(_Exposed(source, len(refs), top), box=padded_box(refs[0]),
-                                   settings=PropagationSettings(match_exposure=match))
-            seg.run()
-            row.append(_r(np.mean([iou(seg.mask(t), refs[t]) for t in range(seg.n)])))
-        rows.append(row)
-    note = ("mean IoU from the box (padded 4%); every frame is multiplied by a gain that "
-            "rises from 1 to the given factor and back, twice over the clip (clipped to 255); "
-            "each propagated frame is brought back to its key frame's exposure, measured at "
-            "the points the optical flow pairs, before the key's colours judge it")
     return Section(title, headers, rows, [note])
 
 

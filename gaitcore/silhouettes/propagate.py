@@ -279,12 +279,15 @@ class Warp:
     exposure : float
         This frame's brightness over the previous one's, at the same points of the scene
         (1 when the camera's exposure held).
+    level : float or None
+        This frame's background level in the window (:func:`_background_level`).
     """
 
     prob: np.ndarray
     trust: np.ndarray
     window: tuple[int, int, int, int]
     exposure: float = 1.0
+    level: float | None = None
 
 
 def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
@@ -326,19 +329,25 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
     prob = cv2.remap(mask[y0:y1, x0:x1].astype(np.float32), map_x, map_y, cv2.INTER_LINEAR,
                      borderMode=cv2.BORDER_CONSTANT, borderValue=0)
     came = cv2.remap(b, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    exposure = _exposure(came, a, prob < 0.05, settings)
+    background = _measurable(a) & (prob < 0.05)
+    exposure = _exposure(came, a, background & _measurable(came), settings)
     residual = cv2.GaussianBlur(np.abs(a - np.float32(exposure) * came), (0, 0), 1.5)
     trust = np.exp(-np.square(residual / settings.trust_grey))
-    return Warp(cv2.GaussianBlur(prob, (0, 0), 1.0), trust, (x0, y0, x1, y1), exposure)
+    return Warp(cv2.GaussianBlur(prob, (0, 0), 1.0), trust, (x0, y0, x1, y1), exposure,
+                _background_level(a, background))
 
 
-def _exposure(before: np.ndarray, after: np.ndarray, background: np.ndarray,
+def _measurable(grey: np.ndarray) -> np.ndarray:
+    """Pixels neither near black nor clipped: their level scales with the exposure."""
+    return (grey > 16) & (grey < 240)
+
+
+def _exposure(before: np.ndarray, after: np.ndarray, ok: np.ndarray,
               settings: PropagationSettings) -> float:
     """This frame's brightness over the previous one's: the median ratio of ``after`` to
-    ``before`` (grey, paired by the flow) on the background, where neither is near black or
-    clipped and the pair matches once the ratio is applied; 1 when under a quarter of the
-    pairs match (the flow paired different things: Muybridge's plates, a cut)."""
-    ok = background & (before > 16) & (before < 240) & (after > 16) & (after < 240)
+    ``before`` (grey, paired by the flow) at the pixels ``ok`` (the background's, measurable
+    in both), among the pairs that match once the ratio is applied; 1 when under a quarter
+    of them match (the flow paired different things: Muybridge's plates, a cut)."""
     if ok.sum() < 64:
         return 1.0
     b, a = before[ok].astype(np.float32), after[ok].astype(np.float32)
@@ -351,9 +360,8 @@ def _exposure(before: np.ndarray, after: np.ndarray, background: np.ndarray,
 
 
 def _background_level(grey: np.ndarray, background: np.ndarray) -> float | None:
-    """Median grey level of the background pixels that are neither near black nor clipped;
-    None when too few."""
-    values = grey[background & (grey > 16) & (grey < 240)]
+    """Median grey level of the ``background`` pixels (measurable ones); None when too few."""
+    values = grey[background]
     return float(np.median(values)) if values.size >= 64 else None
 
 
@@ -380,20 +388,19 @@ class ExposureTrack:
         self.level = None
         if mask.any():
             x0, y0, x1, y1 = window(mask, settings)
-            self.level = _background_level(grey[y0:y1, x0:x1], mask[y0:y1, x0:x1] == 0)
+            grey = grey[y0:y1, x0:x1]
+            self.level = _background_level(grey, _measurable(grey) & (mask[y0:y1, x0:x1] == 0))
         self.log_gain = 0.0
 
-    def step(self, warp: Warp, grey: np.ndarray) -> float:
-        """Follow the exposure to this frame (``grey``, the whole frame at the working size,
-        warped to by ``warp``); returns the gain that brings it back to the key frame's."""
+    def step(self, warp: Warp) -> float:
+        """Follow the exposure to the frame ``warp`` carried the mask to; returns the gain
+        that brings it back to the key frame's."""
         s = self.settings
         if not s.match_exposure:
             return 1.0
         self.log_gain += float(np.log(warp.exposure))
-        x0, y0, x1, y1 = warp.window
-        level = _background_level(grey[y0:y1, x0:x1], warp.prob < 0.05)
-        if self.level is not None and level is not None:
-            self.log_gain += s.exposure_pull * (float(np.log(level / self.level))
+        if self.level is not None and warp.level is not None:
+            self.log_gain += s.exposure_pull * (float(np.log(warp.level / self.level))
                                                 - self.log_gain)
         matched = np.sign(self.log_gain) * max(0.0, abs(self.log_gain) - s.exposure_slack)
         return float(np.exp(-matched))

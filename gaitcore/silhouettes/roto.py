@@ -423,7 +423,7 @@ class RotoSegmentation:
         if mask.sum() < self.s.lost_frac * self.key_area:
             return Cut(find_again(small, models, self.key_area, self.s), 0.0)
         warp = warp_mask(mask, grey_prev, grey, flow_of, self.s)
-        gain = exposure.step(warp, grey)
+        gain = exposure.step(warp)
         x0, y0, x1, y1 = warp.window
         cut = fuse_cut(exposed(small[y0:y1, x0:x1], gain), warp.prob, warp.trust, models,
                        self.s)

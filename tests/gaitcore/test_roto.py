@@ -505,8 +505,8 @@ def test_a_frame_is_brought_back_to_its_key_exposure():
 def test_the_exposure_followed_along_a_pass_neither_drifts_nor_matches_small_changes():
     """Frame-to-frame ratios 0.2% low every frame (an estimate between separate
     photographs) while the background keeps its level: pulled towards that level, the
-    followed exposure stays within the slack, so nothing is matched (not pulled, it drifts). A frame lit 1.5 times
-    (its background too) is matched, less the slack."""
+    followed exposure stays within the slack, so nothing is matched (not pulled, it
+    drifts). A frame lit 1.5 times (its background too) is matched, less the slack."""
     from gaitcore.silhouettes.propagate import ExposureTrack, PropagationSettings, Warp
 
     rng = np.random.default_rng(2)
@@ -514,21 +514,24 @@ def test_the_exposure_followed_along_a_pass_neither_drifts_nor_matches_small_cha
     mask = np.zeros_like(grey)
     mask[40:80, 50:110] = 1
     settings = PropagationSettings()
-    x0, y0, x1, y1 = 0, 0, 160, 120
-    prob = mask[y0:y1, x0:x1].astype(np.float32)
+    prob = mask.astype(np.float32)
+    lit = np.clip(grey * 1.5, 0, 255).astype(np.uint8)
+
+    def warp(ratio: float, frame: np.ndarray) -> Warp:
+        background = frame[(mask == 0) & (frame < 240)]
+        return Warp(prob, prob, (0, 0, 160, 120), ratio, float(np.median(background)))
 
     def biased(track):
-        return [track.step(Warp(prob, prob, (x0, y0, x1, y1), 0.998), grey) for _ in range(300)]
+        return [track.step(warp(0.998, grey)) for _ in range(300)]
 
     assert max(biased(ExposureTrack(grey, mask, settings))) == 1.0
     assert biased(ExposureTrack(grey, mask, PropagationSettings(exposure_pull=0.0)))[-1] > 1.5
 
-    lit = np.clip(grey * 1.5, 0, 255).astype(np.uint8)
     track = ExposureTrack(grey, mask, settings)
-    gain = track.step(Warp(prob, prob, (x0, y0, x1, y1), 1.5), lit)
+    gain = track.step(warp(1.5, lit))
     assert gain == pytest.approx(np.exp(-(np.log(1.5) - settings.exposure_slack)), rel=0.02)
     off = ExposureTrack(grey, mask, PropagationSettings(match_exposure=False))
-    assert off.step(Warp(prob, prob, (x0, y0, x1, y1), 1.5), lit) == 1.0
+    assert off.step(warp(1.5, lit)) == 1.0
 
 
 @pytest.mark.slow
