@@ -39,7 +39,7 @@ from gaitcore.cli import main as gaitcore_main
 from gaitcore.footage.image_folder import read_mask_folder
 from gaitcore.footage.sources import open_frames
 from gaitcore.silhouettes.annotations import Rect, Scribble
-from gaitcore.silhouettes.propagate import PropagationSettings
+from gaitcore.silhouettes.propagate import PropagationSettings, exposed
 from gaitcore.silhouettes.roto import RotoSegmentation
 from gaitcore.silhouettes.segmentation import segment_clip
 
@@ -165,10 +165,11 @@ def _davis_mean_iou(title: str, columns: list[str], cases: list[_Case], note: st
         source, refs = _davis(name)
         row: list = [name]
         for case in cases:
-            gains = 1 + (case.lit - 1) * (0.5 - 0.5 * np.cos(4 * np.pi * np.arange(len(refs))
-                                                             / len(refs)))
-            frames = [np.clip(source[t] * gains[t], 0, 255).astype(np.uint8)
-                      if case.lit != 1.0 else source[t] for t in range(case.start, len(refs))]
+            frames = [source[t] for t in range(case.start, len(refs))]
+            if case.lit != 1.0:
+                gains = 1 + (case.lit - 1) * (0.5 - 0.5 * np.cos(
+                    4 * np.pi * np.arange(case.start, len(refs)) / len(refs)))
+                frames = [exposed(f, g) for f, g in zip(frames, gains)]
             seg = RotoSegmentation(frames, box=padded_box(refs[case.start], case.pad),
                                    settings=PropagationSettings(
                                        match_exposure=case.match_exposure))

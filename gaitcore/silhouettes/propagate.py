@@ -329,7 +329,7 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
     prob = cv2.remap(mask[y0:y1, x0:x1].astype(np.float32), map_x, map_y, cv2.INTER_LINEAR,
                      borderMode=cv2.BORDER_CONSTANT, borderValue=0)
     came = cv2.remap(b, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    background = _measurable(a) & (prob < 0.05)
+    background = _background(a, prob)
     exposure = _exposure(came, a, background & _measurable(came), settings)
     residual = cv2.GaussianBlur(np.abs(a - np.float32(exposure) * came), (0, 0), 1.5)
     trust = np.exp(-np.square(residual / settings.trust_grey))
@@ -340,6 +340,12 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
 def _measurable(grey: np.ndarray) -> np.ndarray:
     """Pixels neither near black nor clipped: their level scales with the exposure."""
     return (grey > 16) & (grey < 240)
+
+
+def _background(grey: np.ndarray, subject: np.ndarray) -> np.ndarray:
+    """The pixels whose level measures the exposure: measurable, and off the subject
+    (``subject``: a 0/1 mask, or a warped one in [0, 1])."""
+    return _measurable(grey) & (subject < 0.05)
 
 
 def _exposure(before: np.ndarray, after: np.ndarray, ok: np.ndarray,
@@ -389,7 +395,7 @@ class ExposureTrack:
         if mask.any():
             x0, y0, x1, y1 = window(mask, settings)
             grey = grey[y0:y1, x0:x1]
-            self.level = _background_level(grey, _measurable(grey) & (mask[y0:y1, x0:x1] == 0))
+            self.level = _background_level(grey, _background(grey, mask[y0:y1, x0:x1]))
         self.log_gain = 0.0
 
     def step(self, warp: Warp) -> float:
