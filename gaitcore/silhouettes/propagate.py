@@ -22,7 +22,7 @@ Key frames (the first one, corrected ones) are cut by :mod:`gaitcore.silhouettes
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
@@ -96,15 +96,22 @@ class PropagationSettings:
         The flow's trust at a pixel is exp(-(r / trust_grey)**2), with r the grey-level
         difference between this frame and the previous one warped by the flow (blurred).
     match_exposure : bool
-        Bring each propagated frame back to its key frame's exposure before the key's colours
-        judge it (see :class:`ExposureTrack`; off only to measure what it brings).
+        Bring each propagated frame back to its key frame's exposure and colour balance before
+        the key's colours judge it (see :class:`ExposureTrack`; off only to measure what it
+        brings).
     exposure_pull : float
-        Each frame, the exposure followed from frame to frame is pulled this much (in log)
-        towards the background's level over the key frame's, so it cannot drift.
+        Each frame, the exposure and the colour balance followed from frame to frame are
+        pulled this much (in log) towards the background's level and colour over the key
+        frame's, so they cannot drift.
     exposure_slack : float
         Exposure changes up to this much (in log) are left to the colour models, and only the
         rest is matched: between separate photographs (Muybridge's plates) the estimate is
         only good to a few percent.
+    balance_slack : float
+        The same for the colour balance (each channel's log gain less their mean). A camera's
+        white balance drifting by 6% took DAVIS bear from 0.914 to 0.681, so this is matched
+        almost whole; it is pulled towards the background's colour, whose content moves it
+        by about this much on footage whose balance held.
     """
 
     subject_side_px: int = 200
@@ -129,6 +136,7 @@ class PropagationSettings:
     match_exposure: bool = True
     exposure_pull: float = 0.05
     exposure_slack: float = 0.05
+    balance_slack: float = 0.01
 
     def __post_init__(self) -> None:
         if self.flow_preset not in _PRESETS:
@@ -281,6 +289,12 @@ class Warp:
         (1 when the camera's exposure held).
     level : float or None
         This frame's background level in the window (:func:`_background_level`).
+    balance : ndarray of shape (3,)
+        This frame's colour balance over the previous one's: the log ratios of its B, G and R
+        levels at the same points, less their mean (zeros when the balance held or was not
+        measured; see :func:`_balance`).
+    balance_level : ndarray of shape (3,) or None
+        The background's colour in the window (:func:`_balance_level`).
     """
 
     prob: np.ndarray
@@ -288,10 +302,13 @@ class Warp:
     window: tuple[int, int, int, int]
     exposure: float = 1.0
     level: float | None = None
+    balance: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    balance_level: np.ndarray | None = None
 
 
 def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
-              flow_of: cv2.DISOpticalFlow, settings: PropagationSettings) -> Warp:
+              flow_of: cv2.DISOpticalFlow, settings: PropagationSettings, *,
+              colours: tuple[np.ndarray, np.ndarray] | None = None) -> Warp:
     """Carry the previous mask to this frame by dense optical flow.
 
     Parameters
@@ -302,6 +319,9 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
         The previous and this frame, grey, at the working size.
     flow_of : cv2.DISOpticalFlow
     settings : PropagationSettings
+    colours : (ndarray, ndarray) of shape (rows, cols, 3), uint8, optional
+        The previous and this frame in colour (BGR, working size): the warp then measures
+        the change of colour balance too.
 
     Returns
     -------
@@ -315,7 +335,8 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
     The exposure is the median ratio of this frame's grey levels to the previous frame's at
     the background's points the flow pairs (see :func:`_exposure`). DIS matches
     mean-normalised patches, so its flow holds through a change of exposure; the trust
-    compares the two frames once the ratio is applied.
+    compares the two frames once the ratio is applied. The change of colour balance is
+    measured the same way, per channel, at the same points (:func:`_balance`).
     """
     x0, y0, x1, y1 = window(mask, settings)
     a = np.ascontiguousarray(grey[y0:y1, x0:x1])
@@ -333,13 +354,23 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
     exposure = _exposure(came, a, background & _measurable(came), settings)
     residual = cv2.GaussianBlur(np.abs(a - np.float32(exposure) * came), (0, 0), 1.5)
     trust = np.exp(-np.square(residual / settings.trust_grey))
-    return Warp(cv2.GaussianBlur(prob, (0, 0), 1.0), trust, (x0, y0, x1, y1), exposure,
+    warp = Warp(cv2.GaussianBlur(prob, (0, 0), 1.0), trust, (x0, y0, x1, y1), exposure,
                 _background_level(a, background))
+    if colours is None:
+        return warp
+    grid = (slice(0, None, 2), slice(0, None, 2))  # a quarter of the pixels tell it as well
+    here = np.ascontiguousarray(colours[1][y0:y1, x0:x1][grid])
+    came_bgr = cv2.remap(np.ascontiguousarray(colours[0][y0:y1, x0:x1]), map_x[grid],
+                         map_y[grid], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return replace(warp, balance=_balance(came_bgr, here, background[grid], settings),
+                   balance_level=_balance_level(here, background[grid]))
 
 
-def _measurable(grey: np.ndarray) -> np.ndarray:
-    """Pixels neither near black nor clipped: their level scales with the exposure."""
-    return (grey > 16) & (grey < 240)
+def _measurable(image: np.ndarray) -> np.ndarray:
+    """Pixels (grey, or BGR) neither near black nor clipped in any channel: their level
+    scales with the exposure."""
+    channels = 1 if image.ndim == 2 else image.shape[2]
+    return cv2.inRange(image, (17,) * channels, (239,) * channels) > 0
 
 
 def _background(grey: np.ndarray, subject: np.ndarray) -> np.ndarray:
@@ -371,13 +402,44 @@ def _background_level(grey: np.ndarray, background: np.ndarray) -> float | None:
     return float(np.median(values)) if values.size >= 64 else None
 
 
-class ExposureTrack:
-    """A frame's exposure over its key frame's, followed along one pass of the propagation.
+def _balance(before: np.ndarray, after: np.ndarray, background: np.ndarray,
+             settings: PropagationSettings) -> np.ndarray:
+    """The change of colour balance from ``before`` to ``after`` (BGR, paired by the flow):
+    the median log ratio of each channel at the ``background`` pixels measurable in both,
+    among the pairs that match once the ratios are applied, less their mean; zeros when
+    under a quarter of them match (as :func:`_exposure`)."""
+    ok = background & _measurable(before) & _measurable(after)
+    if ok.sum() < 64:
+        return np.zeros(3)
+    b, a = before[ok].astype(np.float32).T, after[ok].astype(np.float32).T
+    ratio = np.log(a) - np.log(b)
+    gains = np.exp([np.median(r) for r in ratio]).astype(np.float32)
+    same = (np.abs(a - gains[:, None] * b) < settings.trust_grey).all(axis=0)
+    if same.sum() < max(64, ok.sum() // 4):
+        return np.zeros(3)
+    log_gains = np.array([np.median(r[same]) for r in ratio], np.float64)
+    return log_gains - log_gains.mean()
 
-    Two estimates, as a complementary filter: the product of the frame-to-frame ratios
-    (:attr:`Warp.exposure`; exact from frame to frame, but it drifts over hundreds of frames)
-    pulled by ``exposure_pull`` towards the ratio of the background's median grey level to
-    the key frame's (it cannot drift, but the background's content changes it).
+
+def _balance_level(bgr: np.ndarray, background: np.ndarray) -> np.ndarray | None:
+    """The log of the median B, G and R of the ``background`` pixels measurable in all three,
+    less their mean; None when too few."""
+    ok = background & _measurable(bgr)
+    if ok.sum() < 64:
+        return None
+    log_level = np.log([np.median(channel) for channel in bgr[ok].T])
+    return log_level - log_level.mean()
+
+
+class ExposureTrack:
+    """A frame's exposure and colour balance over its key frame's, followed along one pass of
+    the propagation.
+
+    Two estimates of each, as a complementary filter: the sum of the frame-to-frame log
+    ratios (:attr:`Warp.exposure`, :attr:`Warp.balance`; exact from frame to frame, but they
+    drift over hundreds of frames) pulled by ``exposure_pull`` towards the background's
+    median level (grey), and its colour (:func:`_balance_level`), against the key frame's
+    (they cannot drift, but the background's content changes them).
 
     Parameters
     ----------
@@ -386,36 +448,54 @@ class ExposureTrack:
     mask : ndarray of shape (rows, cols), uint8
         Its 0/1 mask.
     settings : PropagationSettings
+    colour : ndarray of shape (rows, cols, 3), uint8, optional
+        The key frame in colour (BGR): without it the balance is followed from frame to frame
+        only.
     """
 
-    def __init__(self, grey: np.ndarray, mask: np.ndarray, settings: PropagationSettings
-                 ) -> None:
+    def __init__(self, grey: np.ndarray, mask: np.ndarray, settings: PropagationSettings,
+                 colour: np.ndarray | None = None) -> None:
         self.settings = settings
-        self.level = None
+        self.level = self.balance_level = None
         if mask.any():
             x0, y0, x1, y1 = window(mask, settings)
-            grey = grey[y0:y1, x0:x1]
-            self.level = _background_level(grey, _background(grey, mask[y0:y1, x0:x1]))
+            background = _background(grey[y0:y1, x0:x1], mask[y0:y1, x0:x1])
+            self.level = _background_level(grey[y0:y1, x0:x1], background)
+            if colour is not None:
+                self.balance_level = _balance_level(colour[y0:y1, x0:x1], background)
         self.log_gain = 0.0
+        self.log_balance = np.zeros(3)
 
-    def step(self, warp: Warp) -> float:
-        """Follow the exposure to the frame ``warp`` carried the mask to; returns the gain
-        that brings it back to the key frame's."""
+    def step(self, warp: Warp) -> np.ndarray:
+        """Follow the exposure and the balance to the frame ``warp`` carried the mask to;
+        returns the B, G and R gains that bring it back to the key frame's."""
         s = self.settings
         if not s.match_exposure:
-            return 1.0
+            return np.ones(3)
         self.log_gain += float(np.log(warp.exposure))
         if self.level is not None and warp.level is not None:
             self.log_gain += s.exposure_pull * (float(np.log(warp.level / self.level))
                                                 - self.log_gain)
-        matched = np.sign(self.log_gain) * max(0.0, abs(self.log_gain) - s.exposure_slack)
-        return float(np.exp(-matched))
+        self.log_balance = self.log_balance + warp.balance
+        if self.balance_level is not None and warp.balance_level is not None:
+            self.log_balance += s.exposure_pull * (warp.balance_level - self.balance_level
+                                                   - self.log_balance)
+        matched = _beyond(self.log_gain, s.exposure_slack) + _beyond(self.log_balance,
+                                                                      s.balance_slack)
+        return np.exp(-matched)
 
 
-def exposed(small: np.ndarray, gain: float) -> np.ndarray:
-    """A frame's colours times ``gain`` (saturated): a frame brought back to its key frame's
-    exposure before the key's colours judge it."""
-    return small if gain == 1.0 else cv2.convertScaleAbs(small, alpha=gain)
+def _beyond(log_gain, slack: float):
+    """What of a log gain (or each of several) exceeds ``slack``, with its sign."""
+    return np.sign(log_gain) * np.maximum(0.0, np.abs(log_gain) - slack)
+
+
+def exposed(small: np.ndarray, gains) -> np.ndarray:
+    """A frame's colours times ``gains`` (one for all channels, or one each for B, G and R;
+    rounded, saturated): a frame brought back to its key frame's exposure and balance before
+    the key's colours judge it."""
+    gains = np.broadcast_to(np.asarray(gains, np.float64), (3,))
+    return small if (gains == 1.0).all() else cv2.transform(small, np.diag(gains))
 
 
 def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: ColourTable,

@@ -399,33 +399,36 @@ class RotoSegmentation:
     def _carry(self, mask: np.ndarray, key: int, frames, store: PackedMasks,
                progress, done, total) -> None:
         flow_of = make_flow(self.s)
-        grey_prev = models = exposure = None
+        prev = grey_prev = models = exposure = None
         for t, small in frames:
             grey = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
             if t == key:
                 models = key_colours(small, mask, self.s)
-                exposure = ExposureTrack(grey, mask, self.s)
+                exposure = ExposureTrack(grey, mask, self.s, small)
             else:
-                cut = self._step(mask, grey_prev, small, grey, flow_of, models, exposure)
+                cut = self._step(mask, (prev, small), (grey_prev, grey), flow_of, models,
+                                 exposure)
                 store.put(t, cut)
                 mask = cut.mask
                 done[0] += 1
                 report(progress, done[0], max(total, done[0]), "segmentation cancelled")
-            grey_prev = grey
+            prev, grey_prev = small, grey
 
-    def _step(self, mask, grey_prev, small, grey, flow_of, models,
+    def _step(self, mask, colours, greys, flow_of, models,
               exposure: ExposureTrack | None) -> Cut:
-        """One propagated frame, brought back to its key frame's exposure (``exposure``
-        follows it) before the key's colours judge it: a camera's auto-exposure, or
-        Muybridge's plates, each printed lighter or darker."""
+        """One propagated frame (``colours`` and ``greys``: the previous frame and this one),
+        brought back to its key frame's exposure and colour balance (``exposure`` follows
+        them) before the key's colours judge it: a camera's auto-exposure and white balance,
+        or Muybridge's plates, each printed lighter or darker."""
+        small = colours[1]
         if models is None or exposure is None:
             return Cut(mask, 0.0)
         if mask.sum() < self.s.lost_frac * self.key_area:
             return Cut(find_again(small, models, self.key_area, self.s), 0.0)
-        warp = warp_mask(mask, grey_prev, grey, flow_of, self.s)
-        gain = exposure.step(warp)
+        warp = warp_mask(mask, greys[0], greys[1], flow_of, self.s, colours=colours)
+        gains = exposure.step(warp)
         x0, y0, x1, y1 = warp.window
-        cut = fuse_cut(exposed(small[y0:y1, x0:x1], gain), warp.prob, warp.trust, models,
+        cut = fuse_cut(exposed(small[y0:y1, x0:x1], gains), warp.prob, warp.trust, models,
                        self.s)
         out = np.zeros_like(mask)
         out[y0:y1, x0:x1] = cut.mask

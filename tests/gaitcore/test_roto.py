@@ -493,13 +493,42 @@ def test_the_warp_measures_a_change_of_exposure_and_trusts_the_flow_through_it()
     assert held.exposure == pytest.approx(1.0, abs=0.01)
 
 
+def test_the_warp_measures_a_change_of_colour_balance():
+    """A textured colour frame moved 3 pixels right, its blue times 0.9 and its red times
+    1.1 (a camera's white balance drifting warmer): the warp tells each channel's log ratio
+    less their mean, zeros when the balance held or the colours were not given."""
+    from gaitcore.silhouettes.propagate import PropagationSettings, make_flow, warp_mask
+
+    rng = np.random.default_rng(5)
+    before = cv2.GaussianBlur(rng.integers(50, 190, (140, 180, 3), np.uint8), (0, 0), 1.5)
+    moved = np.roll(before, 3, axis=1)
+    warmer = np.clip(np.rint(moved * np.array([0.9, 1.0, 1.1])), 0, 255).astype(np.uint8)
+    mask = np.zeros(before.shape[:2], np.uint8)
+    mask[50:90, 60:120] = 1
+    settings = PropagationSettings()
+    grey = [cv2.cvtColor(f, cv2.COLOR_BGR2GRAY) for f in (before, moved, warmer)]
+    logs = np.log([0.9, 1.0, 1.1])
+    warp = warp_mask(mask, grey[0], grey[2], make_flow(settings), settings,
+                     colours=(before, warmer))
+    np.testing.assert_allclose(warp.balance, logs - logs.mean(), atol=0.01)
+    assert warp.balance_level is not None
+    held = warp_mask(mask, grey[0], grey[1], make_flow(settings), settings,
+                     colours=(before, moved))
+    np.testing.assert_allclose(held.balance, 0.0, atol=0.005)
+    unmeasured = warp_mask(mask, grey[0], grey[2], make_flow(settings), settings)
+    assert not unmeasured.balance.any() and unmeasured.balance_level is None
+
+
 def test_a_frame_is_brought_back_to_its_key_exposure():
     from gaitcore.silhouettes.propagate import exposed
 
     frame = np.array([[[100, 120, 200], [255, 255, 255]]], np.uint8)
     np.testing.assert_array_equal(exposed(frame, 0.5), [[[50, 60, 100], [128, 128, 128]]])
     np.testing.assert_array_equal(exposed(frame, 1.5)[0, 0], [150, 180, 255])
+    np.testing.assert_array_equal(exposed(frame, (0.5, 1.0, 1.5)),
+                                  [[[50, 120, 255], [128, 255, 255]]])
     assert exposed(frame, 1.0) is frame
+    assert exposed(frame, np.ones(3)) is frame
 
 
 def test_the_exposure_followed_along_a_pass_neither_drifts_nor_matches_small_changes():
@@ -522,16 +551,57 @@ def test_the_exposure_followed_along_a_pass_neither_drifts_nor_matches_small_cha
         return Warp(prob, prob, (0, 0, 160, 120), ratio, float(np.median(background)))
 
     def biased(track):
-        return [track.step(warp(0.998, grey)) for _ in range(300)]
+        return np.array([track.step(warp(0.998, grey)) for _ in range(300)])
 
-    assert max(biased(ExposureTrack(grey, mask, settings))) == 1.0
-    assert biased(ExposureTrack(grey, mask, PropagationSettings(exposure_pull=0.0)))[-1] > 1.5
+    assert biased(ExposureTrack(grey, mask, settings)).max() == 1.0
+    drifted = biased(ExposureTrack(grey, mask, PropagationSettings(exposure_pull=0.0)))[-1]
+    assert drifted.min() > 1.5
 
     track = ExposureTrack(grey, mask, settings)
-    gain = track.step(warp(1.5, lit))
-    assert gain == pytest.approx(np.exp(-(np.log(1.5) - settings.exposure_slack)), rel=0.02)
+    gains = track.step(warp(1.5, lit))
+    np.testing.assert_allclose(gains, np.exp(-(np.log(1.5) - settings.exposure_slack)),
+                               rtol=0.02)
     off = ExposureTrack(grey, mask, PropagationSettings(match_exposure=False))
-    assert off.step(warp(1.5, lit)) == 1.0
+    assert (off.step(warp(1.5, lit)) == 1.0).all()
+
+
+def test_the_colour_balance_followed_along_a_pass_neither_drifts_nor_is_left_unmatched():
+    """Frame-to-frame balance ratios 0.03% too red every frame while the background keeps
+    its colour: pulled towards that colour, the followed balance stays within its slack
+    (not pulled, it drifts). A frame whose red is 1.1 times and blue 0.9 times (its
+    background too) is matched on each channel, less the slack, and its exposure is left
+    alone."""
+    from gaitcore.silhouettes.propagate import (
+        ExposureTrack,
+        PropagationSettings,
+        Warp,
+        _balance_level,
+    )
+
+    rng = np.random.default_rng(2)
+    colour = rng.integers(60, 200, (120, 160, 3)).astype(np.uint8)
+    grey = cv2.cvtColor(colour, cv2.COLOR_BGR2GRAY)
+    mask = np.zeros_like(grey)
+    mask[40:80, 50:110] = 1
+    settings = PropagationSettings()
+    prob = mask.astype(np.float32)
+    logs = np.log([0.9, 1.0, 1.1])
+    warmer = np.clip(np.rint(colour * np.exp(logs)), 0, 255).astype(np.uint8)
+
+    def warp(balance: np.ndarray, frame: np.ndarray) -> Warp:
+        return Warp(prob, prob, (0, 0, 160, 120), balance=balance,
+                    balance_level=_balance_level(frame, mask == 0))
+
+    redder = np.array([-0.00015, -0.00015, 0.0003])
+    for pull, kept in ((settings.exposure_pull, True), (0.0, False)):
+        track = ExposureTrack(grey, mask, PropagationSettings(exposure_pull=pull), colour)
+        last = [track.step(warp(redder, colour)) for _ in range(300)][-1]
+        assert (np.abs(np.log(last)) < 1e-9).all() == kept
+
+    gains = ExposureTrack(grey, mask, settings, colour).step(warp(logs - logs.mean(), warmer))
+    expected = -(logs - logs.mean())
+    expected = np.sign(expected) * (np.abs(expected) - settings.balance_slack)
+    np.testing.assert_allclose(np.log(gains), expected, atol=0.01)
 
 
 @pytest.mark.slow
@@ -553,3 +623,25 @@ def test_a_clip_whose_exposure_swells_keeps_its_subject(shared_data):
     seg.run()
     scores = [iou(seg.mask(t), refs[t]) for t in range(n)]
     assert np.mean(scores) > 0.7, np.mean(scores)
+
+
+@pytest.mark.slow
+def test_a_clip_whose_white_balance_drifts_keeps_its_subject(shared_data):
+    """DAVIS bear whose red swells and blue sinks by 6% twice over the clip (a camera's
+    automatic white balance): each frame is brought back to its key frame's balance before
+    the key's colours judge it, so the bear is kept (mean IoU 0.68 without, against 0.91 for
+    the clip as shot)."""
+    from gaitcore.footage.image_folder import read_mask_folder
+    from gaitcore.footage.sources import open_frames
+
+    bear = shared_data / "davis-bear"
+    refs = [m > 0 for m in read_mask_folder(bear / "Annotations")]
+    with open_frames(bear / "JPEGImages") as source:
+        n = len(refs)
+        swell = 1 + 0.06 * (0.5 - 0.5 * np.cos(4 * np.pi * np.arange(n) / n))
+        drifted = [np.clip(np.rint(source[t] * np.array([1 / swell[t], 1.0, swell[t]])), 0, 255)
+                   .astype(np.uint8) for t in range(n)]
+    seg = RotoSegmentation(drifted, box=padded_box(refs[0]))
+    seg.run()
+    scores = [iou(seg.mask(t), refs[t]) for t in range(n)]
+    assert np.mean(scores) > 0.85, np.mean(scores)
