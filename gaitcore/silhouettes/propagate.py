@@ -22,6 +22,7 @@ Key frames (the first one, corrected ones) are cut by :mod:`gaitcore.silhouettes
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import cv2
@@ -381,56 +382,65 @@ def _background(grey: np.ndarray, subject: np.ndarray) -> np.ndarray:
     return _measurable(grey) & (subject < 0.05)
 
 
+def _log_ratios(before: np.ndarray, after: np.ndarray, ok: np.ndarray,
+                settings: PropagationSettings) -> np.ndarray | None:
+    """How much brighter ``after`` is than ``before`` (grey or BGR, paired by the flow), per
+    channel: the median log ratio at the pixels ``ok`` (the background's, measurable in both),
+    among the pairs that match on every channel once the ratios are applied; None when under
+    a quarter of them match (the flow paired different things: Muybridge's plates, a cut)."""
+    n = int(ok.sum())
+    if n < 64:
+        return None
+    b = before[ok].reshape(n, -1).T.astype(np.float32)
+    a = after[ok].reshape(n, -1).T.astype(np.float32)
+    ratio = np.log(a) - np.log(b)
+    gains = np.exp([np.median(r) for r in ratio]).astype(np.float32)
+    same = (np.abs(a - gains[:, None] * b) < settings.trust_grey).all(axis=0)
+    if same.sum() < max(64, n // 4):
+        return None
+    return np.array([np.median(r[same]) for r in ratio])
+
+
 def _exposure(before: np.ndarray, after: np.ndarray, ok: np.ndarray,
               settings: PropagationSettings) -> float:
-    """This frame's brightness over the previous one's: the median ratio of ``after`` to
-    ``before`` (grey, paired by the flow) at the pixels ``ok`` (the background's, measurable
-    in both), among the pairs that match once the ratio is applied; 1 when under a quarter
-    of them match (the flow paired different things: Muybridge's plates, a cut)."""
-    if ok.sum() < 64:
-        return 1.0
-    b, a = before[ok].astype(np.float32), after[ok].astype(np.float32)
-    ratio = np.log(a) - np.log(b)
-    gain = float(np.exp(np.median(ratio)))
-    same = np.abs(a - gain * b) < settings.trust_grey
-    if same.sum() < max(64, ok.sum() // 4):
-        return 1.0
-    return float(np.exp(np.median(ratio[same])))
-
-
-def _background_level(grey: np.ndarray, background: np.ndarray) -> float | None:
-    """Median grey level of the ``background`` pixels (measurable ones); None when too few."""
-    values = grey[background]
-    return float(np.median(values)) if values.size >= 64 else None
+    """This frame's brightness over the previous one's (grey, :func:`_log_ratios`); 1 when
+    it cannot be told."""
+    log_ratio = _log_ratios(before, after, ok, settings)
+    return 1.0 if log_ratio is None else float(np.exp(log_ratio[0]))
 
 
 def _balance(before: np.ndarray, after: np.ndarray, background: np.ndarray,
              settings: PropagationSettings) -> np.ndarray:
-    """The change of colour balance from ``before`` to ``after`` (BGR, paired by the flow):
-    the median log ratio of each channel at the ``background`` pixels measurable in both,
-    among the pairs that match once the ratios are applied, less their mean; zeros when
-    under a quarter of them match (as :func:`_exposure`)."""
+    """The change of colour balance from ``before`` to ``after`` (BGR): the log ratios of
+    :func:`_log_ratios` at the ``background`` pixels measurable in both, less their mean;
+    zeros when they cannot be told."""
     ok = background & _measurable(before) & _measurable(after)
-    if ok.sum() < 64:
-        return np.zeros(3)
-    b, a = before[ok].astype(np.float32).T, after[ok].astype(np.float32).T
-    ratio = np.log(a) - np.log(b)
-    gains = np.exp([np.median(r) for r in ratio]).astype(np.float32)
-    same = (np.abs(a - gains[:, None] * b) < settings.trust_grey).all(axis=0)
-    if same.sum() < max(64, ok.sum() // 4):
-        return np.zeros(3)
-    log_gains = np.array([np.median(r[same]) for r in ratio], np.float64)
-    return log_gains - log_gains.mean()
+    log_ratios = _log_ratios(before, after, ok, settings)
+    return np.zeros(3) if log_ratios is None else log_ratios - log_ratios.mean()
+
+
+def _levels(image: np.ndarray, ok: np.ndarray) -> np.ndarray | None:
+    """The median level of each channel (grey: one) at the pixels ``ok``; None when too few."""
+    n = int(ok.sum())
+    if n < 64:
+        return None
+    return np.array([np.median(channel) for channel in image[ok].reshape(n, -1).T])
+
+
+def _background_level(grey: np.ndarray, background: np.ndarray) -> float | None:
+    """Median grey level of the ``background`` pixels (measurable ones); None when too few."""
+    level = _levels(grey, background)
+    return None if level is None else float(level[0])
 
 
 def _balance_level(bgr: np.ndarray, background: np.ndarray) -> np.ndarray | None:
     """The log of the median B, G and R of the ``background`` pixels measurable in all three,
     less their mean; None when too few."""
-    ok = background & _measurable(bgr)
-    if ok.sum() < 64:
+    levels = _levels(bgr, background & _measurable(bgr))
+    if levels is None:
         return None
-    log_level = np.log([np.median(channel) for channel in bgr[ok].T])
-    return log_level - log_level.mean()
+    log_levels = np.log(levels)
+    return log_levels - log_levels.mean()
 
 
 class ExposureTrack:
@@ -487,12 +497,12 @@ class ExposureTrack:
         return np.exp(-matched)
 
 
-def _beyond(log_gain, slack: float):
+def _beyond(log_gain: float | np.ndarray, slack: float) -> np.ndarray:
     """What of a log gain (or each of several) exceeds ``slack``, with its sign."""
     return np.sign(log_gain) * np.maximum(0.0, np.abs(log_gain) - slack)
 
 
-def exposed(small: np.ndarray, gains) -> np.ndarray:
+def exposed(small: np.ndarray, gains: float | Sequence[float] | np.ndarray) -> np.ndarray:
     """A frame's colours times ``gains`` (one for all channels, or one each for B, G and R;
     rounded, saturated): a frame brought back to its key frame's exposure and balance before
     the key's colours judge it."""
