@@ -5,16 +5,26 @@ Both are ``cv2.grabCut`` (Rother et al. 2004) at the working size of
 :mod:`gaitcore.silhouettes.propagate`. On the first frame, when the camera's own motion can be
 explained (one or two homographies fitted to the optical flow outside the box), pixels in the
 box that move differently seed the subject's colour model: this is what separates a pale dog
-from pale grass.
+from pale grass. GrabCut only finds a local optimum, and which one depends on its seeds: the
+first frame is cut from several (the motion over a few frames, over each of them, none) and
+the cut whose own colour mixtures best tell its two sides apart is kept.
 """
 
 from __future__ import annotations
 
+import os
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+
 import cv2
 import numpy as np
 
+from gaitcore.silhouettes.colour_model import colour_separation
 from gaitcore.silhouettes.propagate import TOUCHING, Box, Cut, PropagationSettings, disk
 from gaitcore.silhouettes.tracking import keep_overlapping
+
+_SAME_SEEDS = 0.95
+"""Motion seeds overlapping earlier ones this much (IoU) would cut the same: not tried again."""
 
 
 def _grabcut(image: np.ndarray, labels: np.ndarray, iters: int) -> np.ndarray:
@@ -29,8 +39,9 @@ def _grabcut(image: np.ndarray, labels: np.ndarray, iters: int) -> np.ndarray:
     return ((labels == cv2.GC_FGD) | (labels == cv2.GC_PR_FGD)).astype(np.uint8)
 
 
-def motion_residual(first: np.ndarray, later: list[np.ndarray], box: Box) -> np.ndarray | None:
-    """How differently each pixel of ``first`` moves from the camera, in working pixels.
+def motion_residuals(first: np.ndarray, later: list[np.ndarray], box: Box) -> list[np.ndarray]:
+    """How differently each pixel of ``first`` moves from the camera, in working pixels, over
+    each of a few following frames.
 
     Parameters
     ----------
@@ -43,10 +54,10 @@ def motion_residual(first: np.ndarray, later: list[np.ndarray], box: Box) -> np.
 
     Returns
     -------
-    ndarray of shape (rows, cols), float32, or None
-        Median over ``later`` of the distance between the optical flow and the flow of the
-        best of (up to) two homographies fitted by RANSAC outside the box (a far and a near
-        plane of the scene); None when the camera's motion cannot be fitted.
+    list of ndarray of shape (rows, cols), float32
+        For each frame of ``later`` whose camera motion could be fitted, the distance between
+        the optical flow and the flow of the best of (up to) two homographies fitted by RANSAC
+        outside the box (a far and a near plane of the scene).
     """
     grey = cv2.cvtColor(first, cv2.COLOR_BGR2GRAY)
     rows, cols = grey.shape
@@ -56,7 +67,7 @@ def motion_residual(first: np.ndarray, later: list[np.ndarray], box: Box) -> np.
     ys, xs = np.mgrid[0:rows:4, 0:cols:4]
     sel = outside[ys, xs]
     if sel.sum() < 64:
-        return None
+        return []
     gy, gx = np.mgrid[0:rows, 0:cols].astype(np.float32)
     grid = np.dstack([gx, gy])
     flow_of = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM)
@@ -77,10 +88,10 @@ def motion_residual(first: np.ndarray, later: list[np.ndarray], box: Box) -> np.
             src, dst = src[inliers.ravel() == 0], dst[inliers.ravel() == 0]
         if np.isfinite(best).all():
             residuals.append(best)
-    return np.median(residuals, axis=0) if residuals else None
+    return residuals
 
 
-def cut_first(small: np.ndarray, box: Box | None, *, residual: np.ndarray | None = None,
+def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndarray] = (),
               seed: np.ndarray | None = None, subject: np.ndarray | None = None,
               background: np.ndarray | None = None,
               settings: PropagationSettings) -> np.ndarray:
@@ -92,13 +103,13 @@ def cut_first(small: np.ndarray, box: Box | None, *, residual: np.ndarray | None
         The frame at the working size.
     box : (x, y, w, h) or None
         The subject's box (working size): everything outside is background.
-    residual : ndarray of shape (rows, cols), optional
-        From :func:`motion_residual`: inside the box, pixels that move unlike the camera
-        start as "probably subject", the others as "probably background", and where the box
-        lies on the frame's edge the cut keeps to their box grown by a tenth; kept only when
-        the result spans that box, otherwise the whole box starts as "probably subject".
+    residuals : sequence of ndarray of shape (rows, cols)
+        From :func:`motion_residuals`. Their median, and each of them, seeds one cut: inside
+        the box, pixels that move unlike the camera start as "probably subject", the others
+        as "probably background", and where the box lies on the frame's edge the cut keeps
+        to their box grown by a tenth. A cut is a candidate only when it spans that box.
     seed : ndarray of shape (rows, cols), bool, optional
-        Instead of ``residual``: the pixels of the box that start as "probably subject"
+        Instead of ``residuals``: the pixels of the box that start as "probably subject"
         (e.g. the paper's colour model's guess), under the same check.
     subject, background : ndarray of shape (rows, cols), bool, optional
         Sure subject and sure background (rectangles, strokes).
@@ -107,22 +118,52 @@ def cut_first(small: np.ndarray, box: Box | None, *, residual: np.ndarray | None
     Returns
     -------
     ndarray of shape (rows, cols), uint8
-        0/1 mask: the components touching the sure subject (or the largest one).
+        0/1 mask: the components touching the sure subject (or the largest one). With a box,
+        the candidate cuts and the cut with the whole box "probably subject" compete, and the
+        one whose own colours best separate its two sides (:func:`_separation`) is kept.
     """
-    moving = None if seed is None or box is None or not seed.any() else seed
-    around = box
-    if box is not None and residual is not None and moving is None:
-        x, y, w, h = box
-        inside = np.zeros(small.shape[:2], bool)
-        inside[y : y + h, x : x + w] = True
-        moving = _moving(residual, inside)
-        if moving is not None:
-            around = _in_from_edges(box, moving)
-    if moving is not None:
-        mask = _cut_labels(small, around, moving, subject, background, settings)
-        if _spans(mask, around):
-            return mask
-    return _cut_labels(small, box, None, subject, background, settings)
+    if box is None:
+        return _cut_labels(small, None, None, subject, background, settings)
+    x, y, w, h = box
+    inside = np.zeros(small.shape[:2], bool)
+    inside[y : y + h, x : x + w] = True
+    seeds: list[np.ndarray] = []
+    if seed is not None and seed.any():
+        seeds = [seed]
+    elif residuals:
+        median = [np.median(residuals, axis=0)] if len(residuals) > 1 else []
+        seeds = [m for m in (_moving(r, inside) for r in [*median, *residuals]) if m is not None]
+    starts: list[tuple[Box, np.ndarray | None]] = [(box, None)]
+    for moving in seeds:
+        if not any(_iou(moving, other) > _SAME_SEEDS for _, other in starts[1:]):
+            starts.append((_in_from_edges(box, moving) if seed is None else box, moving))
+
+    def cut(start: tuple[Box, np.ndarray | None]) -> np.ndarray:
+        return _cut_labels(small, *start, subject, background, settings)
+
+    with ThreadPoolExecutor(max_workers=min(len(starts), os.cpu_count() or 1)) as pool:
+        masks = list(pool.map(cut, starts))  # OpenCV lets go of the GIL in its calls
+    cuts = [mask for mask, (around, moving) in zip(masks, starts)
+            if moving is None or _spans(mask, around)]
+    return max(cuts, key=lambda mask: _separation(small, mask, box))
+
+
+def _learning_window(box: Box) -> tuple[slice, slice]:
+    """Where a first cut learns its colours: the box grown by half its longer side (and 8
+    pixels). A small box in a big frame would otherwise compare the subject with the whole
+    landscape."""
+    x, y, w, h = box
+    grow = max(w, h) // 2 + 8
+    return slice(max(0, y - grow), y + h + grow), slice(max(0, x - grow), x + w + grow)
+
+
+def _separation(small: np.ndarray, mask: np.ndarray, box: Box) -> float:
+    """How well a cut's own colours tell its two sides apart (:func:`colour_separation`),
+    over the :func:`_learning_window` of ``box``, the same pixels for every candidate. A cut
+    that took ground of the subject's colours, or left a leg outside, has the same colours
+    on both sides."""
+    win = _learning_window(box)
+    return colour_separation(small[win], mask[win])
 
 
 def _cut_labels(small: np.ndarray, box: Box | None, moving: np.ndarray | None,
@@ -143,13 +184,8 @@ def _cut_labels(small: np.ndarray, box: Box | None, moving: np.ndarray | None,
     if subject is not None:
         labels[subject] = cv2.GC_FGD
     mask = np.zeros((rows, cols), np.uint8)
-    if box is None:
-        mask[:] = _grabcut(small, labels, settings.first_iters)
-    else:  # the background's colours are learnt near the box: a small box in a big frame
-        x, y, w, h = box  # would otherwise compare the subject with the whole landscape
-        grow = max(w, h) // 2 + 8
-        win = (slice(max(0, y - grow), y + h + grow), slice(max(0, x - grow), x + w + grow))
-        mask[win] = _grabcut(small[win], np.ascontiguousarray(labels[win]), settings.first_iters)
+    win = (slice(None), slice(None)) if box is None else _learning_window(box)
+    mask[win] = _grabcut(small[win], np.ascontiguousarray(labels[win]), settings.first_iters)
     anchor = subject if subject is not None and subject.any() else None
     if anchor is None:
         n, comp, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
@@ -157,6 +193,10 @@ def _cut_labels(small: np.ndarray, box: Box | None, moving: np.ndarray | None,
             return mask
         anchor = comp == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     return keep_overlapping(mask, anchor, least=TOUCHING)
+
+
+def _iou(a: np.ndarray, b: np.ndarray) -> float:
+    return float((a & b).sum()) / max(float((a | b).sum()), 1.0)
 
 
 def grown_box(mask: np.ndarray, within: Box) -> Box:

@@ -68,7 +68,9 @@ class PropagationSettings:
     lost_frac : float
         A mask smaller than this fraction of the key frame's counts as lost.
     motion_offsets : tuple of int
-        Frames after the first whose motion seeds the first cut (empty: colour only).
+        Frames after the first whose motion seeds the first cut: the motion over them all
+        (the median) seeds one candidate cut, and over each of them another (empty: colour
+        only; see :func:`gaitcore.silhouettes.keyframe.cut_first`).
     first_scale : float
         Frame 0 is cut at this many times the working size (then shrunk to it).
     part_gap_frac : float

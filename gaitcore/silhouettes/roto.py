@@ -31,7 +31,7 @@ from gaitcore.silhouettes.keyframe import (
     cut_first,
     cut_with_prior,
     grown_box,
-    motion_residual,
+    motion_residuals,
 )
 from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import (
@@ -294,18 +294,19 @@ class RotoSegmentation:
             rects_bg = self.work.shrink_mask(rect_mask(frame.shape, self.background_rects,
                                                        "background"))
         box = None if self.box is None else self.work.box(self.box.as_tuple())
-        residual = seed = None
+        residuals: list[np.ndarray] = []
+        seed = None
         if box is None and self.subject_rects and self.background_rects:
             box, seed = self._box_from_rects(small, rects_fg, rects_bg)
         elif box is not None and self.s.motion_offsets:
             later = [self.work.shrink(check_frame(self.source[k]))
                      for k in self.s.motion_offsets if k < self.n]
-            residual = motion_residual(small, later, box) if later else None
+            residuals = motion_residuals(small, later, box)
         fg = _union(subject, rects_fg)
         bg = _union(background, rects_bg)
         if fg is not None and bg is not None:
             bg &= ~fg
-        return cut_first(small, box, residual=residual, seed=seed, subject=fg, background=bg,
+        return cut_first(small, box, residuals=residuals, seed=seed, subject=fg, background=bg,
                          settings=self.s)
 
     def _box_from_rects(self, small: np.ndarray, fg: np.ndarray, bg: np.ndarray):

@@ -447,6 +447,50 @@ def test_a_box_drawn_past_the_frame_keeps_to_what_moves(shared_data):
     assert np.mean(scores) > 0.5, np.mean(scores)
 
 
+def test_a_cut_that_took_ground_or_left_legs_out_separates_its_colours_worse():
+    """The first cut is chosen among candidates by how well each one's own colour mixtures
+    tell its two sides apart: the true silhouette of a brown animal on sand (with a shadowed
+    strip of ground) beats the same silhouette with bands of ground taken, or two legs left
+    out."""
+    from gaitcore.silhouettes.keyframe import _separation
+
+    rng = np.random.default_rng(0)
+    img = np.empty((120, 200, 3), np.float32)
+    img[:] = (150, 190, 210)
+    img[90:] = (80, 100, 110)
+    truth = np.zeros((120, 200), np.uint8)
+    truth[40:70, 60:140] = 1
+    for x0 in (65, 85, 115, 130):
+        truth[70:100, x0 : x0 + 6] = 1
+    img[truth > 0] = (60, 80, 140)
+    img = np.clip(img + rng.normal(0, 8, img.shape), 0, 255).astype(np.uint8)
+    box = (52, 32, 96, 76)
+    took = truth.copy()
+    took[100:108, 55:145] = took[32:40, 55:145] = 1
+    left = truth.copy()
+    left[70:100, 60:100] = 0
+    best = _separation(img, truth, box)
+    assert best > _separation(img, took, box) + 1.0
+    assert best > _separation(img, left, box) + 0.2
+
+
+def test_the_first_cut_does_not_hang_on_one_choice_of_motion_seeds(shared_data):
+    """DAVIS dog taken every second frame: the motion over frames 2, 6 and 12 (the default
+    offsets) spreads into the fence on the box's top edge, and the cut it seeds takes the
+    fence (IoU 0.57 when it was the only cut tried). The motion over one frame alone seeds a
+    cut whose colours separate better, and that cut is kept."""
+    from gaitcore.footage.image_folder import read_mask_folder
+    from gaitcore.footage.sources import open_frames
+
+    dog = shared_data / "davis-dog"
+    refs = [m > 0 for m in read_mask_folder(dog / "Annotations")][::2]
+    with open_frames(dog / "JPEGImages") as source:
+        frames = [source[t] for t in range(0, len(source), 2)]
+    seg = RotoSegmentation(frames, box=padded_box(refs[0]))
+    first = seg.work.enlarge(seg._first_cut().mask)
+    assert iou(first, refs[0]) > 0.8, iou(first, refs[0])
+
+
 def test_a_stroke_changes_its_frame_near_itself_only():
     """A corrected frame whose mask holds a wrong strip of background along the top of its
     box, far from the stroke painted at the bottom: the graph cut of the whole frame would
