@@ -107,7 +107,7 @@ def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndar
         From :func:`motion_residuals`. Their median, and each of them, seeds one cut: inside
         the box, pixels that move unlike the camera start as "probably subject", the others
         as "probably background", and where the box lies on the frame's edge the cut keeps
-        to their box grown by a tenth. A cut is a candidate only when it spans that box.
+        to their box grown by a tenth.
     seed : ndarray of shape (rows, cols), bool, optional
         Instead of ``residuals``: the pixels of the box that start as "probably subject"
         (e.g. the paper's colour model's guess), under the same check.
@@ -119,8 +119,9 @@ def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndar
     -------
     ndarray of shape (rows, cols), uint8
         0/1 mask: the components touching the sure subject (or the largest one). With a box,
-        the candidate cuts and the cut with the whole box "probably subject" compete, and the
-        one whose own colours best separate its two sides (:func:`_separation`) is kept.
+        the cut with the whole box "probably subject" and those seeded compete: of those that
+        span their box (:func:`_spans`), the one whose own colours best separate its two
+        sides (:func:`_separation`) is kept; the first when none does.
     """
     if box is None:
         return _cut_labels(small, None, None, subject, background, settings)
@@ -143,9 +144,8 @@ def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndar
 
     with ThreadPoolExecutor(max_workers=min(len(starts), os.cpu_count() or 1)) as pool:
         masks = list(pool.map(cut, starts))  # OpenCV lets go of the GIL in its calls
-    cuts = [mask for mask, (around, moving) in zip(masks, starts)
-            if moving is None or _spans(mask, around)]
-    return max(cuts, key=lambda mask: _separation(small, mask, box))
+    cuts = [mask for mask, (around, _) in zip(masks, starts) if _spans(mask, around)]
+    return max(cuts, key=lambda mask: _separation(small, mask, box)) if cuts else masks[0]
 
 
 def _learning_window(box: Box) -> tuple[slice, slice]:

@@ -491,6 +491,22 @@ def test_the_first_cut_does_not_hang_on_one_choice_of_motion_seeds(shared_data):
     assert iou(first, refs[0]) > 0.8, iou(first, refs[0])
 
 
+def test_a_first_cut_in_a_corner_of_a_loose_box_is_not_kept(shared_data):
+    """DAVIS goat boxed loosely (padded 30%): the cut started with the whole box "probably
+    subject" takes a block of rock in the box's corner, whose colours separate well from the
+    rest. It does not span the box, so it is not a candidate, and the cut seeded by what moves
+    is kept (IoU 0.0 when that cut competed)."""
+    from gaitcore.footage.image_folder import read_mask_folder
+    from gaitcore.footage.sources import open_frames
+
+    goat = shared_data / "davis-goat"
+    refs = [m > 0 for m in read_mask_folder(goat / "Annotations")]
+    with open_frames(goat / "JPEGImages") as source:
+        seg = RotoSegmentation(source, box=padded_box(refs[0], 0.3))
+        first = seg.work.enlarge(seg._first_cut().mask)
+    assert iou(first, refs[0]) > 0.6, iou(first, refs[0])
+
+
 def test_a_stroke_changes_its_frame_near_itself_only():
     """A corrected frame whose mask holds a wrong strip of background along the top of its
     box, far from the stroke painted at the bottom: the graph cut of the whole frame would
