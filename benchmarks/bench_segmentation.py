@@ -5,6 +5,8 @@
   (:mod:`gaitcore.bench.scripted_user`); the same in the lower third of the reference box
   (the legs); the time of one re-propagation.
 - DAVIS with the exposure swelling twice (x1.4, x0.6): from one box, exposure matched or not.
+- Any other clips in the DAVIS layout, in the folder named by ``GAIT_MORE_DAVIS`` (footage the
+  team does not keep): from one box, the first frame's cut and the whole clip.
 - The paper's rectangles on DAVIS bear: the paper's "gmm" method beside the default.
 - Muybridge's race horse through the whole ``gaitcore analyze``: usable (period 36 +- 1,
   r1 and r2 >= 0.8) from each of four sets of input a user could draw.
@@ -34,7 +36,7 @@ import cv2
 import numpy as np
 
 from benchmarks import Section
-from gaitcore.bench.scripted_user import iou, padded_box, run_scripted_user
+from gaitcore.bench.scripted_user import iou, legs_iou, padded_box, run_scripted_user
 from gaitcore.cli import main as gaitcore_main
 from gaitcore.footage.image_folder import read_mask_folder
 from gaitcore.footage.sources import open_frames
@@ -71,11 +73,14 @@ LONG_FRAMES, LONG_W, LONG_H = 10_000, 640, 480
 def run() -> list[Section]:
     """All sections of this benchmark (real-footage rows are skipped when it is absent)."""
     return [davis_from_box(), davis_loose_box(), davis_later_start(), davis_exposure(),
-            paper_rectangles(), muybridge_usable(), speed(), long_clip_memory()]
+            more_davis(), paper_rectangles(), muybridge_usable(), speed(), long_clip_memory()]
 
 
 def _davis(name: str):
-    root = DATA / f"davis-{name}"
+    return _davis_at(DATA / f"davis-{name}")
+
+
+def _davis_at(root: Path):
     return open_frames(root / "JPEGImages"), [m > 0 for m in read_mask_folder(root / "Annotations")]
 
 
@@ -186,6 +191,36 @@ def _davis_mean_iou(title: str, columns: list[str], cases: list[_Case], note: st
                                    for t in range(seg.n)])))
         rows.append(row)
     return Section(title, headers, rows, [note])
+
+
+def more_davis() -> Section:
+    """The first table's protocol, from the box only, on clips beyond ../shared/data: every
+    folder under ``GAIT_MORE_DAVIS`` with ``JPEGImages`` and ``Annotations`` (DAVIS's layout;
+    for instance DAVIS 2016's validation clips of animals)."""
+    headers = ["clip", "frames", "first frame's cut", "IoU from box", "legs IoU from box"]
+    title = "More clips in the DAVIS layout, from one box (GAIT_MORE_DAVIS)"
+    where = os.environ.get("GAIT_MORE_DAVIS")
+    clips = sorted(p for p in Path(where).iterdir() if (p / "Annotations").is_dir()
+                   and (p / "JPEGImages").is_dir()) if where and Path(where).is_dir() else []
+    if not clips:
+        return Section(title, headers, [], [
+            "skipped: set GAIT_MORE_DAVIS to a folder of clips, each with JPEGImages/ and "
+            "Annotations/ (one reference mask per frame), to run the first table's protocol "
+            "(box only) on footage the benchmark has not seen"])
+    rows = []
+    for root in clips:
+        source, refs = _davis_at(root)
+        seg = RotoSegmentation(source, box=padded_box(refs[0]))
+        seg.run()
+        masks = [seg.mask(t) for t in range(seg.n)]
+        rows.append([root.name, len(refs), _r(iou(seg.work.enlarge(seg.keys[0].mask), refs[0])),
+                     _r(np.mean([iou(m, r) for m, r in zip(masks, refs)])),
+                     _r(np.mean([legs_iou(m, r) for m, r in zip(masks, refs)]))])
+    return Section(title, headers, rows, [
+        f"clips: every folder under {where} with JPEGImages/ and Annotations/; box: the "
+        "reference's bounding box on frame 0 padded 4%, no strokes; legs: the lower third of "
+        "each frame's reference box",
+        "first frame's cut: the key frame the clip is propagated from, at the working size"])
 
 
 def paper_rectangles() -> Section:
