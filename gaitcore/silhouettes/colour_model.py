@@ -265,12 +265,10 @@ def learn_colours(image: np.ndarray, mask: np.ndarray) -> ColourTable | None:
     The mixtures are the graph cut's own (five Gaussians per side in BGR, learnt by
     ``cv2.grabCut`` from the mask as sure labels).
     """
-    if min(int(mask.sum()), int(mask.size - mask.sum())) < 16:
+    mixtures = _mixtures(image, mask, 1)
+    if mixtures is None:
         return None
-    labels = np.where(mask > 0, cv2.GC_FGD, cv2.GC_BGD).astype(np.uint8)
-    bgd, fgd = np.zeros((1, 65)), np.zeros((1, 65))
-    cv2.setRNGSeed(0)
-    cv2.grabCut(np.ascontiguousarray(image), labels, None, bgd, fgd, 1, cv2.GC_INIT_WITH_MASK)
+    fgd, bgd = mixtures
     centres = bin_centres_bgr(6)
     llr = _mixture_loglik(fgd, centres) - _mixture_loglik(bgd, centres)
     return ColourTable(np.clip(llr, -8, 8).astype(np.float32), 6)
@@ -298,15 +296,28 @@ def colour_separation(image: np.ndarray, mask: np.ndarray) -> float:
     cuts of one frame.
     """
     image, mask = image[::2, ::2], mask[::2, ::2]
-    if min(int(mask.sum()), int(mask.size - mask.sum())) < 16:
+    mixtures = _mixtures(image, mask, 0)
+    if mixtures is None:
         return -np.inf
-    labels = np.where(mask > 0, cv2.GC_FGD, cv2.GC_BGD).astype(np.uint8)
-    bgd, fgd = np.zeros((1, 65)), np.zeros((1, 65))
-    cv2.setRNGSeed(0)
-    cv2.grabCut(np.ascontiguousarray(image), labels, None, bgd, fgd, 0, cv2.GC_INIT_WITH_MASK)
+    fgd, bgd = mixtures
     x = image.reshape(-1, 3).astype(np.float64)
     llr = np.clip(_mixture_loglik(fgd, x) - _mixture_loglik(bgd, x), -8, 8)
     return float(np.where(mask.ravel() > 0, llr, -llr).mean())
+
+
+def _mixtures(image: np.ndarray, mask: np.ndarray,
+              iters: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """``cv2.grabCut``'s subject and background mixtures for a known silhouette (its sides as
+    sure labels): k-means alone with ``iters`` 0, learnt again ``iters`` times otherwise;
+    None when either side has fewer than 16 pixels."""
+    if min(int(mask.sum()), int(mask.size - mask.sum())) < 16:
+        return None
+    labels = np.where(mask > 0, cv2.GC_FGD, cv2.GC_BGD).astype(np.uint8)
+    bgd, fgd = np.zeros((1, 65)), np.zeros((1, 65))
+    cv2.setRNGSeed(0)
+    cv2.grabCut(np.ascontiguousarray(image), labels, None, bgd, fgd, iters,
+                cv2.GC_INIT_WITH_MASK)
+    return fgd, bgd
 
 
 COLOUR_NOISE_VAR = 1.0
