@@ -20,7 +20,14 @@ import cv2
 import numpy as np
 
 from gaitcore.silhouettes.colour_model import colour_separation
-from gaitcore.silhouettes.propagate import TOUCHING, Box, Cut, PropagationSettings, disk
+from gaitcore.silhouettes.propagate import (
+    TOUCHING,
+    Box,
+    Cut,
+    PropagationSettings,
+    disk,
+    overlap,
+)
 from gaitcore.silhouettes.tracking import keep_overlapping
 
 _SAME_SEEDS = 0.95
@@ -136,7 +143,7 @@ def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndar
         seeds = [m for m in (_moving(r, inside) for r in [*median, *residuals]) if m is not None]
     starts: list[tuple[Box, np.ndarray | None]] = [(box, None)]
     for moving in seeds:
-        if not any(_iou(moving, other) > _SAME_SEEDS for _, other in starts[1:]):
+        if not any(overlap(moving, other) > _SAME_SEEDS for _, other in starts[1:]):
             starts.append((_in_from_edges(box, moving) if seed is None else box, moving))
 
     def cut(start: tuple[Box, np.ndarray | None]) -> np.ndarray:
@@ -193,10 +200,6 @@ def _cut_labels(small: np.ndarray, box: Box | None, moving: np.ndarray | None,
             return mask
         anchor = comp == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     return keep_overlapping(mask, anchor, least=TOUCHING)
-
-
-def _iou(a: np.ndarray, b: np.ndarray) -> float:
-    return float((a & b).sum()) / max(float((a | b).sum()), 1.0)
 
 
 def grown_box(mask: np.ndarray, within: Box) -> Box:
@@ -291,9 +294,8 @@ def cut_with_prior(small: np.ndarray, prior: np.ndarray, *, subject: np.ndarray 
     mask = keep_overlapping(_grabcut(small, labels, iters), subject if hard else inside,
                             least=TOUCHING)
     area, prior_area = float(mask.sum()), float(inside.sum())
-    agree = float((mask & inside).sum()) / max(float((mask | inside).sum()), 1.0)
     touched = hard or (background is not None and background.any())
     if not touched and not (settings.max_shrink * prior_area <= area
                             <= settings.max_growth * prior_area):
         return Cut(inside, 0.0)  # a flood or a collapse: keep the warped prior
-    return Cut(mask, agree)
+    return Cut(mask, overlap(mask, inside))

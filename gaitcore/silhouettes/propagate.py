@@ -251,6 +251,11 @@ def make_flow(settings: PropagationSettings) -> cv2.DISOpticalFlow:
     return cv2.DISOpticalFlow_create(_PRESETS[settings.flow_preset])
 
 
+def overlap(a: np.ndarray, b: np.ndarray) -> float:
+    """Intersection over union of two 0/1 (or bool) masks; 0 when both are empty."""
+    return float((a & b).sum()) / max(float((a | b).sum()), 1.0)
+
+
 def disk(r: int) -> np.ndarray:
     """Elliptic structuring element of radius ``r`` (at least 1)."""
     r = max(1, int(r))
@@ -567,8 +572,7 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
         return Cut(np.zeros_like(inside), 0.0)  # nothing there looks like the subject: gone
     if not settings.max_shrink * prior_area <= area <= settings.max_growth * prior_area:
         return Cut(inside, 0.0)
-    agree = float((mask & inside).sum()) / max(float((mask | inside).sum()), 1.0)
-    return Cut(mask, agree)
+    return Cut(mask, overlap(mask, inside))
 
 
 def _log_odds(p: np.ndarray, floor: float) -> np.ndarray:

@@ -46,6 +46,7 @@ from gaitcore.silhouettes.propagate import (
     fuse_cut,
     key_colours,
     make_flow,
+    overlap,
     warp_mask,
 )
 from gaitcore.silhouettes.sketch import rasterize_strokes
@@ -464,8 +465,7 @@ class RotoSegmentation:
         end, mine = store.get(key), self.keys[key].mask > 0
         if end is None:
             return 1.0
-        union = float((mine | (end.mask > 0)).sum())
-        return max(_DRIFT_FLOOR, 1.0 - float((mine & (end.mask > 0)).sum()) / max(union, 1.0))
+        return max(_DRIFT_FLOOR, 1.0 - overlap(mine, end.mask > 0))
 
     def _blend(self, t: int, a: int, b: int, *, key_frames_only: bool = False) -> Cut:
         """Forward cut from key ``a`` and backward cut from key ``b`` at frame ``t``, masks
