@@ -18,8 +18,10 @@ three steps:
    can still be usable), so each end is set frame by frame. A frame belongs to the gait when
    its silhouette repeats one period later or earlier (the silhouettes of a cycle come back)
    *and* it moves (it differs from the frames a quarter period away, which rules out an animal
-   standing still, whose silhouettes repeat too). Distances are in the stretch's own units:
-   its silhouettes' spread about their mean.
+   standing still, whose silhouettes repeat too; a frame within a quarter period of the
+   clip's end, which lacks one of those, is compared with the frame of the same phase one
+   period on instead). Distances are in the stretch's own units: its silhouettes' spread
+   about their mean.
 
 The period reported is the gait cycle, the lag at which the silhouettes come back: PC1 may
 oscillate at half the gait cycle (the diagnosis' period), for a walk or a trot seen from the
@@ -298,6 +300,11 @@ def _refine(f: np.ndarray, a: int, b: int, period: float,
         d = np.nan_to_num(_lag_distance(f, quarter) / spread, nan=0.0)
         motion[:-quarter] = np.maximum(motion[:-quarter], d)
         motion[quarter:] = np.maximum(motion[quarter:], d)
+        far = int(round(period)) - quarter  # a quarter period the other way, one period on
+        if quarter < far <= n - quarter:  # stands in for the neighbour an end frame lacks
+            e = np.nan_to_num(_lag_distance(f, far) / spread, nan=0.0)
+            motion[:quarter] = np.maximum(motion[:quarter], e[:quarter])
+            motion[-quarter:] = np.maximum(motion[-quarter:], e[-quarter:])
     floor = float(np.median(repeat[core]))
     typical = float(np.median(motion[core]))
     ok = (repeat <= floor + settings.repeat_tolerance * (1.0 - floor)) & (

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import cv2
 import numpy as np
 import pytest
 
@@ -24,6 +25,27 @@ def test_a_clip_of_the_walker_between_two_still_stretches():
     assert abs(c.start - 40) <= 5 and abs(c.stop - 136) <= 5
     assert c.period_frames == pytest.approx(24.0, abs=1.0)  # the gait cycle, not the bob
     assert c.usable and c.to_dict(100)["start"] == c.start + 100
+
+
+def _slow_start_clip(n: int, period: float = 36.0) -> RoiClip:
+    """A disc round a small circle, four times slower in the quarter period after frame 0
+    than in the quarter before it (one side of every frame moves little)."""
+    crops = np.zeros((n, 60, 60), np.uint8)
+    for t in range(n):
+        p = t / period
+        turn = p - 0.8 / (2 * np.pi) * (np.sin(2 * np.pi * (p - 0.125)) + np.sin(np.pi / 4))
+        centre = np.round(30 + 8 * np.array([np.cos(2 * np.pi * turn), np.sin(2 * np.pi * turn)]))
+        cv2.circle(crops[t], tuple(int(v) for v in centre), 18, 1, -1)
+    return RoiClip(crops > 0, np.zeros((n, 2)), np.zeros(n, bool))
+
+
+def test_a_clip_that_starts_on_a_slow_moment_of_its_gait_keeps_its_first_frames():
+    # The frames a quarter period after frame 0 look alike; the quarter before, which a clip's
+    # first frames lack, would not: the frame of that phase one period on stands in for it.
+    cycles = find_cycles(_slow_start_clip(144))
+    assert len(cycles) == 1
+    assert (cycles[0].start, cycles[0].stop) == (0, 144)
+    assert cycles[0].period_frames == pytest.approx(36.0, abs=1.0)
 
 
 def test_no_rhythm_no_cycle():
