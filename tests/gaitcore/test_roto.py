@@ -310,6 +310,24 @@ def test_a_small_animal_in_a_large_frame_keeps_its_detail():
     assert min(iou(seg.mask(t), big_truth[t]) for t in range(len(big))) >= 0.85
 
 
+def test_a_small_rectangle_on_a_large_animal_works_at_the_animals_size():
+    """The paper's rectangles cover part of the animal: the working size follows the
+    subject-coloured region they start, so one rectangle on a big animal's shoulder does not
+    make the engine work at several times the resolution a box around it would."""
+    rng = np.random.default_rng(7)
+    frame = np.clip(rng.normal([60, 140, 70], 8, (480, 640, 3)), 0, 255).astype(np.uint8)
+    animal = np.zeros((480, 640), np.uint8)
+    cv2.ellipse(animal, (320, 260), (200, 90), 0, 0, 360, 1, -1)
+    frame[animal > 0] = np.clip(rng.normal([40, 80, 160], 8, (int(animal.sum()), 3)), 0, 255)
+    frames = [frame] * 3
+    rects = RotoSegmentation(frames, subject_rects=[Rect(300, 240, 40, 30)],
+                             background_rects=[Rect(0, 0, 640, 60)])
+    boxed = RotoSegmentation(frames, box=Rect(110, 160, 420, 200))
+    assert 0.8 <= rects.work.scale / boxed.work.scale <= 1.25
+    rects.run()
+    assert iou(rects.mask(2), animal > 0) > 0.95
+
+
 def test_analyze_from_a_later_frame_numbers_masks_and_states_by_source_frame(tmp_path):
     frames, truth = scene(30)
     clip = _write_clip(tmp_path / "clip", frames)
