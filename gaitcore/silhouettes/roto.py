@@ -121,9 +121,7 @@ class RotoSegmentation:
         self.background_rects = [r.clipped_to(cols, rows) for r in background_rects]
         check_scribbles(scribbles, self.n, (rows, cols))
         self.scribbles: tuple[Scribble, ...] = tuple(scribbles)
-        self.work = WorkingSize.for_subject((rows, cols), self._subject_side(), self.s)
-        if self.box is None and self.subject_rects and self.background_rects:
-            self.work = self._work_from_rects(first)
+        self.work = WorkingSize.for_subject((rows, cols), self._subject_side(first), self.s)
         self.fwd = PackedMasks(self.work.wh[::-1])
         self.bwd = PackedMasks(self.work.wh[::-1])
         self.keys: dict[int, Cut] = {}
@@ -236,35 +234,37 @@ class RotoSegmentation:
         return FrameState(lost, t in set(self.corrected_frames), round(cut.confidence, 3))
 
     # -- key frames -------------------------------------------------------------------------
-    def _subject_side(self) -> float:
-        """The subject's longer side in source pixels, as far as frame 0's input tells."""
-        boxes = ([self.box] if self.box else []) + list(self.subject_rects)
+    def _subject_side(self, first: np.ndarray) -> float:
+        """The subject's longer side in source pixels, as far as frame 0's input tells.
+
+        Rectangles and strokes cover part of the animal: it is taken as twice their extent.
+        With the paper's rectangles, it is then the box :meth:`_box_from_rects` finds from
+        them at that size (never less than their extent): a rectangle on a horse's neck,
+        taken for twice its length, made the engine work at three times the resolution of a
+        box around the whole horse, and five times slower."""
         if self.box is not None:
             return float(max(self.box.w, self.box.h))
         pts = [sc.points_xy for sc in self.scribbles if sc.frame == 0 and sc.label == "subject"]
-        if boxes:
-            x0 = min(r.x for r in boxes)
-            x1 = max(r.x + r.w for r in boxes)
-            y0 = min(r.y for r in boxes)
-            y1 = max(r.y + r.h for r in boxes)
+        if self.subject_rects:
+            x0 = min(r.x for r in self.subject_rects)
+            x1 = max(r.x + r.w for r in self.subject_rects)
+            y0 = min(r.y for r in self.subject_rects)
+            y1 = max(r.y + r.h for r in self.subject_rects)
             pts.append(np.array([[x0, y0], [x1, y1]], float))
         allp = np.concatenate(pts)
-        # Rectangles and strokes cover part of the animal: assume it is about twice as big.
-        return 2.0 * float(max(np.ptp(allp[:, 0]), np.ptp(allp[:, 1]), 8.0))
+        extent = float(max(np.ptp(allp[:, 0]), np.ptp(allp[:, 1]), 8.0))
+        if not (self.subject_rects and self.background_rects):
+            return 2.0 * extent
+        work = WorkingSize.for_subject(first.shape[:2], 2.0 * extent, self.s)
+        _, _, w, h = self._box_from_rects(work, work.shrink(first), *self._rect_masks(work))[0]
+        return max(extent, max(w, h) / work.scale)
 
-    def _work_from_rects(self, frame: np.ndarray) -> WorkingSize:
-        """The working size for the subject the rectangles start: the box
-        :meth:`_box_from_rects` finds around it (at the working size their extent gives), and
-        at least their extent. A rectangle on a horse's neck, taken for half the animal, made
-        the engine work at three times the resolution of a box around the whole horse, and
-        five times slower."""
-        small = self.work.shrink(frame)
-        fg = self.work.shrink_mask(rect_mask(frame.shape, self.subject_rects, "subject"))
-        bg = self.work.shrink_mask(rect_mask(frame.shape, self.background_rects, "background"))
-        _, _, w, h = self._box_from_rects(small, fg, bg)[0]
-        extent = self.work.subject_side / 2  # see _subject_side
-        side = max(extent, max(w, h) / self.work.scale)
-        return WorkingSize.for_subject(self.work.shape, side, self.s)
+    def _rect_masks(self, work: WorkingSize) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """The subject and the background rectangles at ``work``'s size (None for none)."""
+        fg, bg = ((work.shrink_mask(rect_mask(work.shape, rects, label)) if rects else None)
+                  for rects, label in ((self.subject_rects, "subject"),
+                                       (self.background_rects, "background")))
+        return fg, bg
 
     def _stroke_masks(self, t: int) -> tuple[np.ndarray | None, np.ndarray | None]:
         out = []
@@ -303,17 +303,12 @@ class RotoSegmentation:
     def _first_cut_here(self, frame: np.ndarray) -> np.ndarray:
         small = self.work.shrink(frame)
         subject, background = self._stroke_masks(0)
-        rects_fg = rects_bg = None
-        if self.subject_rects:
-            rects_fg = self.work.shrink_mask(rect_mask(frame.shape, self.subject_rects, "subject"))
-        if self.background_rects:
-            rects_bg = self.work.shrink_mask(rect_mask(frame.shape, self.background_rects,
-                                                       "background"))
+        rects_fg, rects_bg = self._rect_masks(self.work)
         box = None if self.box is None else self.work.box(self.box.as_tuple())
         residuals: list[np.ndarray] = []
         seed = None
         if box is None and self.subject_rects and self.background_rects:
-            box, seed = self._box_from_rects(small, rects_fg, rects_bg)
+            box, seed = self._box_from_rects(self.work, small, rects_fg, rects_bg)
         elif box is not None and self.s.motion_offsets:
             later = [self.work.shrink(check_frame(self.source[k]))
                      for k in self.s.motion_offsets if k < self.n]
@@ -325,12 +320,13 @@ class RotoSegmentation:
         return cut_first(small, box, residuals=residuals, seed=seed, subject=fg, background=bg,
                          settings=self.s)
 
-    def _box_from_rects(self, small: np.ndarray, fg: np.ndarray, bg: np.ndarray):
-        """The paper's rectangles as a box and a seed: the subject-coloured components (paper
-        2.2's mixture model) under the subject rectangles, and their bounding box grown by a
-        tenth."""
-        model = ColourModel.fit(small, [_scaled(r, self.work.scale) for r in self.subject_rects],
-                                [_scaled(r, self.work.scale) for r in self.background_rects])
+    def _box_from_rects(self, work: WorkingSize, small: np.ndarray, fg: np.ndarray,
+                        bg: np.ndarray):
+        """The paper's rectangles as a box and a seed at ``work``'s size: the subject-coloured
+        components (paper 2.2's mixture model) under the subject rectangles, and their
+        bounding box grown by a tenth."""
+        model = ColourModel.fit(small, [_scaled(r, work.scale) for r in self.subject_rects],
+                                [_scaled(r, work.scale) for r in self.background_rects])
         guess = ((model.posterior(small) > 127) & ~bg) | fg
         guess = keep_overlapping(cv2.morphologyEx(guess.astype(np.uint8), cv2.MORPH_OPEN,
                                                   np.ones((3, 3), np.uint8)) | fg, fg,
