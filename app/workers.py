@@ -14,7 +14,7 @@ import time
 import traceback
 from collections.abc import Callable
 
-from PySide6.QtCore import QObject, Qt, QThread, QThreadPool, Signal
+from PySide6.QtCore import QCoreApplication, QEvent, QObject, Qt, QThread, QThreadPool, Signal
 from PySide6.QtWidgets import QProgressDialog, QWidget
 
 from gaitcore.errors import GaitInputError
@@ -119,10 +119,16 @@ class JobRunner(QObject):
         return job
 
     def shutdown(self) -> None:
-        """Cancel every job and wait for the threads (at window close)."""
+        """Cancel every job, wait for the threads and deliver their last signals (at window close).
+
+        A job's signals are queued to the GUI thread. Those its thread emitted while this
+        waited are delivered here, while their receivers still live, not after the caller has
+        deleted them.
+        """
         for job in list(self._jobs):
             job.cancel()
         self._pool.waitForDone()
+        QCoreApplication.sendPostedEvents(None, QEvent.Type.MetaCall)
 
 
 class ProgressDialog(QProgressDialog):

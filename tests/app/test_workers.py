@@ -84,3 +84,24 @@ def test_the_frame_loader_decodes_only_the_latest_request(qtbot, qapp):
     qtbot.waitUntil(lambda: bool(shown) and shown[-1] == 29, timeout=5000)
     loader.stop()
     assert len(source.decoded) < 5, source.decoded
+
+
+def test_shutdown_delivers_the_last_signals_of_its_jobs_before_it_returns(qtbot, runner):
+    """A job's ``finished`` arrives before shutdown returns, while its receivers still live.
+
+    Delivered later, it would reach a window the caller has deleted meanwhile (a teardown
+    error in CI: "Signal source has been deleted").
+    """
+    release = threading.Event()
+    heard: list[str] = []
+
+    def work(progress):
+        release.wait(5)
+        return "done"
+
+    job = Job(work, "Closing")
+    job.finished.connect(lambda: heard.append("finished"))
+    runner.start(job)
+    threading.Timer(0.1, release.set).start()
+    runner.shutdown()
+    assert heard == ["finished"] and not runner.busy
