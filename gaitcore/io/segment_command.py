@@ -43,8 +43,9 @@ def add_segmentation_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--background", type=_rect, action="append", default=[], metavar="X,Y,W,H",
                    help="rectangle on the background in the first frame (repeatable)")
     p.add_argument("--scribbles", type=Path, default=None, metavar="FILE.json",
-                   help="corrective strokes on any frames: {\"scribbles\": [{\"frame\": 12, "
-                   "\"label\": \"subject\", \"width\": 8, \"points\": [[x, y], ...]}]}")
+                   help="strokes on any frames (subject strokes on the first frame can start "
+                   "without a box): {\"scribbles\": [{\"frame\": 12, \"label\": \"subject\", "
+                   "\"width\": 8, \"points\": [[x, y], ...]}]}")
     p.add_argument("--method", choices=("propagate", "gmm"), default="propagate",
                    help="propagate (default: optical flow from the box, corrections both "
                    "ways) or gmm (the paper's colour mixture, rectangles only)")

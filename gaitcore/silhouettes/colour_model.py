@@ -155,16 +155,31 @@ class ColourModel:
         fg_m = rect_mask(frame.shape, subject_rects, "subject")
         bg_m = rect_mask(frame.shape, background_rects, "background")
         both = fg_m & bg_m
-        fg_m &= ~both
-        bg_m &= ~both
+        fg_m, bg_m = fg_m & ~both, bg_m & ~both
         for name, m in (("subject", fg_m), ("background", bg_m)):
             if m.sum() < 16:
                 raise GaitInputError(
                     f"the {name} rectangles hold fewer than 16 pixels of their own (do subject "
                     "and background rectangles overlap?): draw larger, separate rectangles"
                 )
-        fh = _histogram(frame, fg_m, lut_bits)
-        bh = _histogram(frame, bg_m, lut_bits)
+        return cls._fit(frame, fg_m, bg_m, n_components, lut_bits)
+
+    @classmethod
+    def fit_masks(cls, frame_bgr: np.ndarray, subject: np.ndarray, background: np.ndarray, *,
+                  n_components: int = 5, lut_bits: int = 5) -> ColourModel | None:
+        """Fit both mixtures to the pixels of two masks of one frame (rectangles or brush
+        strokes); pixels in both are ignored. None when either keeps fewer than 16 pixels."""
+        both = subject & background
+        fg_m, bg_m = subject & ~both, background & ~both
+        if min(int(fg_m.sum()), int(bg_m.sum())) < 16:
+            return None
+        return cls._fit(frame_bgr, fg_m, bg_m, n_components, lut_bits)
+
+    @classmethod
+    def _fit(cls, frame_bgr: np.ndarray, fg_m: np.ndarray, bg_m: np.ndarray, n_components: int,
+             lut_bits: int) -> ColourModel:
+        fh = _histogram(frame_bgr, fg_m, lut_bits)
+        bh = _histogram(frame_bgr, bg_m, lut_bits)
         fg = _fit_hist(fh, lut_bits, n_components, None)
         bg = _fit_hist(bh, lut_bits, n_components, None)
         return cls(_make_lut(fg, bg, lut_bits), lut_bits, fg, bg, fh, bh)

@@ -72,11 +72,13 @@ def load_silhouettes(
         For colour footage, the computed masks are written to ``out_dir/masks/00000.png``...,
         named by source frame.
     subject, background : sequence of Rect
-        Rectangles on the first frame of the range (colour footage needs them or ``box``).
+        Rectangles on the first frame of the range (colour footage starts from them, from
+        ``box``, or from a subject stroke on that frame in ``scribbles``).
     box : Rect, optional
         Around the subject on the first frame of the range.
     scribbles : sequence of Scribble
-        Corrective strokes on any frames (source frame numbers).
+        Strokes on any frames (source frame numbers); subject strokes on the first frame of
+        the range can start the segmentation without a box, as in the app.
     method : {"propagate", "gmm"}, optional
         Segmentation method (see :mod:`gaitcore.silhouettes.segmentation`).
     max_side : int or None
@@ -94,7 +96,8 @@ def load_silhouettes(
     Raises
     ------
     GaitInputError
-        Unreadable input, colour footage without rectangles, a bad range, or no subject found.
+        Unreadable input, colour footage with nothing to start from, a bad range, or no
+        subject found.
     """
     source = Path(source)
     if not source.exists():
@@ -107,10 +110,15 @@ def load_silhouettes(
                                  f"choose 0 <= start < stop <= {n}")
         masks = itertools.islice(iter_mask_folder(source), start, last)
         return crop_rois(masks, max_side=max_side, progress=progress)
-    if box is None and not (subject and background):
+    if start or stop is not None:  # scribbles are numbered by source frame, the clip by row
+        end = float("inf") if stop is None else stop
+        scribbles = [replace(s, frame=s.frame - start) for s in scribbles if start <= s.frame < end]
+    painted = any(s.frame == 0 and s.label == "subject" for s in scribbles)
+    if box is None and not (subject and background) and not painted:
         raise GaitInputError(
             f"{source} is colour footage: give a --box x,y,w,h around the subject on its first "
-            "frame, or --subject and --background rectangles (or pass a folder of binary masks)"
+            "frame, --subject and --background rectangles, or a subject stroke on it in "
+            "--scribbles (or pass a folder of binary masks)"
         )
     from gaitcore.footage.sources import open_frames
     from gaitcore.silhouettes.segmentation import segment_clip
@@ -121,9 +129,6 @@ def load_silhouettes(
     def write_mask(index: int, mask: np.ndarray) -> None:
         cv2.imwrite(str(mask_dir / f"{start + index:05d}.png"), mask)
 
-    if start or stop is not None:  # scribbles are numbered by source frame, the clip by row
-        end = float("inf") if stop is None else stop
-        scribbles = [replace(s, frame=s.frame - start) for s in scribbles if start <= s.frame < end]
     with open_frames(source, start=start, stop=stop) as frames:
         if frames.note and note_sink is not None:
             note_sink(frames.note)

@@ -238,10 +238,11 @@ class RotoSegmentation:
         """The subject's longer side in source pixels, as far as frame 0's input tells.
 
         Rectangles and strokes cover part of the animal: it is taken as twice their extent.
-        With the paper's rectangles, it is then the box :meth:`_box_from_rects` finds from
-        them at that size (never less than their extent): a rectangle on a horse's neck,
-        taken for twice its length, made the engine work at three times the resolution of a
-        box around the whole horse, and five times slower."""
+        With subject and background marks (the paper's rectangles, or else brush strokes), it
+        is then the box the subject-coloured region they start spans (:meth:`_box_from_marks`)
+        at that size, never less than their extent: a rectangle on a horse's neck, taken for
+        twice its length, made the engine work at three times the resolution of a box around
+        the whole horse, and five times slower; a stroke along it, four times slower."""
         if self.box is not None:
             return float(max(self.box.w, self.box.h))
         pts = [sc.points_xy for sc in self.scribbles if sc.frame == 0 and sc.label == "subject"]
@@ -253,10 +254,17 @@ class RotoSegmentation:
             pts.append(np.array([[x0, y0], [x1, y1]], float))
         allp = np.concatenate(pts)
         extent = float(max(np.ptp(allp[:, 0]), np.ptp(allp[:, 1]), 8.0))
-        if not (self.subject_rects and self.background_rects):
-            return 2.0 * extent
         work = WorkingSize.for_subject(first.shape[:2], 2.0 * extent, self.s)
-        _, _, w, h = self._box_from_rects(work, work.shrink(first), *self._rect_masks(work))[0]
+        small = work.shrink(first)
+        if self.subject_rects and self.background_rects:
+            _, _, w, h = self._box_from_rects(work, small, *self._rect_masks(work))[0]
+            return max(extent, max(w, h) / work.scale)
+        subject, background = self._stroke_masks(0, work)
+        model = (None if subject is None or background is None
+                 else ColourModel.fit_masks(small, subject, background))
+        if model is None:
+            return 2.0 * extent
+        _, _, w, h = self._box_from_marks(small, model, subject, background)[0]
         return max(extent, max(w, h) / work.scale)
 
     def _rect_masks(self, work: WorkingSize) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -266,11 +274,15 @@ class RotoSegmentation:
                                        (self.background_rects, "background")))
         return fg, bg
 
-    def _stroke_masks(self, t: int) -> tuple[np.ndarray | None, np.ndarray | None]:
+    def _stroke_masks(self, t: int, work: WorkingSize | None = None
+                      ) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """Frame ``t``'s subject and background strokes at ``work``'s size (the engine's by
+        default; None for none)."""
+        work = work or self.work
         out = []
         for label in ("subject", "background"):
             mine = [sc for sc in self.scribbles if sc.frame == t and sc.label == label]
-            out.append(self.work.shrink_mask(rasterize_strokes(mine, self.work.shape) > 0)
+            out.append(work.shrink_mask(rasterize_strokes(mine, work.shape) > 0)
                        if mine else None)
         return out[0], out[1]
 
@@ -322,11 +334,16 @@ class RotoSegmentation:
 
     def _box_from_rects(self, work: WorkingSize, small: np.ndarray, fg: np.ndarray,
                         bg: np.ndarray):
-        """The paper's rectangles as a box and a seed at ``work``'s size: the subject-coloured
-        components (paper 2.2's mixture model) under the subject rectangles, and their
-        bounding box grown by a tenth."""
+        """The paper's rectangles as a box and a seed at ``work``'s size
+        (:meth:`_box_from_marks` with paper 2.2's mixture model of the rectangles)."""
         model = ColourModel.fit(small, [_scaled(r, work.scale) for r in self.subject_rects],
                                 [_scaled(r, work.scale) for r in self.background_rects])
+        return self._box_from_marks(small, model, fg, bg)
+
+    @staticmethod
+    def _box_from_marks(small: np.ndarray, model: ColourModel, fg: np.ndarray, bg: np.ndarray):
+        """The subject-coloured components (by ``model``) under the subject marks ``fg``, never
+        under the background marks ``bg``, and their bounding box grown by a tenth."""
         guess = ((model.posterior(small) > 127) & ~bg) | fg
         guess = keep_overlapping(cv2.morphologyEx(guess.astype(np.uint8), cv2.MORPH_OPEN,
                                                   np.ones((3, 3), np.uint8)) | fg, fg,

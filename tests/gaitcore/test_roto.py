@@ -269,6 +269,27 @@ def test_segment_command_writes_masks_and_states(tmp_path, capsys):
     assert all(0 <= f["confidence"] <= 1 and f["lost"] is False for f in data["frames"])
 
 
+def test_segment_command_starts_from_strokes_on_the_first_frame(tmp_path):
+    """As in the app, a subject stroke on frame 0 (with background strokes) is enough: the
+    scribbles an artist exported can be run again without a box."""
+    frames, truth = scene(6)
+    clip = _write_clip(tmp_path / "clip", frames)
+    ys, xs = np.nonzero(truth[0])
+    cy, (x0, x1) = int(np.median(ys)), np.percentile(xs, [25, 75])
+    rows, cols = truth[0].shape
+    (tmp_path / "s.json").write_text(json.dumps({"scribbles": [
+        {"frame": 0, "label": "subject", "width": 4, "points": [[x0, cy], [x1, cy]]},
+        {"frame": 0, "label": "background", "width": 4,
+         "points": [[2, 2], [cols - 3, 2], [cols - 3, rows - 3], [2, rows - 3], [2, 2]]}]}))
+    out = tmp_path / "out"
+    assert main(["segment", str(clip), "--out", str(out), "--scribbles",
+                 str(tmp_path / "s.json")]) == 0
+    masks = sorted((out / "masks").glob("*.png"))
+    assert len(masks) == 6
+    assert min(iou(cv2.imread(str(p), cv2.IMREAD_UNCHANGED) > 0, truth[t])
+               for t, p in enumerate(masks)) > 0.8
+
+
 @pytest.mark.parametrize(("args", "scribbles", "match"), [
     (["--box", "500,500,10,10"], "", "outside"),
     (["--box", "0,0,128,96"], "", "fills the whole box"),
@@ -279,13 +300,15 @@ def test_segment_command_writes_masks_and_states(tmp_path, capsys):
      '"points": [[40, 50]]}]}', "label 'leg'"),
     (["--scribbles", "SCRIBBLES"], '{"scribbles": [', "not a readable scribbles file"),
     ([], "", "give a --box"),
+    (["--scribbles", "SCRIBBLES"], '{"scribbles": [{"frame": 1, "label": "subject", '
+     '"points": [[40, 50]]}]}', "a subject stroke on it"),
 ])
 def test_segment_command_bad_input(tmp_path, capsys, args, scribbles, match):
     frames, _ = scene(3)
     clip = _write_clip(tmp_path / "clip", frames)
     (tmp_path / "s.json").write_text(scribbles)
     args = [str(tmp_path / "s.json") if a == "SCRIBBLES" else a for a in args]
-    if "--box" not in args:
+    if "--box" not in args and match != "a subject stroke on it":
         args += ["--box", "10,30,60,40"] if args else []
     assert main(["segment", str(clip), "--out", str(tmp_path / "out"), *args]) == 2
     assert match in _error_line(capsys)
@@ -310,22 +333,26 @@ def test_a_small_animal_in_a_large_frame_keeps_its_detail():
     assert min(iou(seg.mask(t), big_truth[t]) for t in range(len(big))) >= 0.85
 
 
-def test_a_small_rectangle_on_a_large_animal_works_at_the_animals_size():
-    """The paper's rectangles cover part of the animal: the working size follows the
-    subject-coloured region they start, so one rectangle on a big animal's shoulder does not
-    make the engine work at several times the resolution a box around it would."""
+@pytest.mark.parametrize("marks", [
+    {"subject_rects": [Rect(300, 240, 40, 30)], "background_rects": [Rect(0, 0, 640, 60)]},
+    {"scribbles": [Scribble(np.array([[300.0, 255.0], [340.0, 255.0]]), 8, 0, "subject"),
+                   Scribble(np.array([[10.0, 30.0], [630.0, 30.0]]), 8, 0, "background")]},
+], ids=["rectangles", "strokes"])
+def test_a_small_mark_on_a_large_animal_works_at_the_animals_size(marks):
+    """Rectangles and strokes cover part of the animal: the working size follows the
+    subject-coloured region they start, so one rectangle or stroke on a big animal's shoulder
+    does not make the engine work at several times the resolution a box around it would."""
     rng = np.random.default_rng(7)
     frame = np.clip(rng.normal([60, 140, 70], 8, (480, 640, 3)), 0, 255).astype(np.uint8)
     animal = np.zeros((480, 640), np.uint8)
     cv2.ellipse(animal, (320, 260), (200, 90), 0, 0, 360, 1, -1)
     frame[animal > 0] = np.clip(rng.normal([40, 80, 160], 8, (int(animal.sum()), 3)), 0, 255)
     frames = [frame] * 3
-    rects = RotoSegmentation(frames, subject_rects=[Rect(300, 240, 40, 30)],
-                             background_rects=[Rect(0, 0, 640, 60)])
+    marked = RotoSegmentation(frames, **marks)
     boxed = RotoSegmentation(frames, box=Rect(110, 160, 420, 200))
-    assert 0.8 <= rects.work.scale / boxed.work.scale <= 1.25
-    rects.run()
-    assert iou(rects.mask(2), animal > 0) > 0.95
+    assert 0.8 <= marked.work.scale / boxed.work.scale <= 1.25
+    marked.run()
+    assert iou(marked.mask(2), animal > 0) > 0.95
 
 
 def test_analyze_from_a_later_frame_numbers_masks_and_states_by_source_frame(tmp_path):
