@@ -1,4 +1,5 @@
-"""Folders of images and of binary masks: listing in name order, sizes, reading.
+"""Folders of images and of binary masks: listing in name order, sizes, reading, and writing
+masks.
 
 A folder is a clip when it holds only image files (hidden files, subfolders and the junk
 files of operating systems are ignored), listed in natural name order (``f2.png`` before
@@ -11,7 +12,9 @@ from __future__ import annotations
 import os
 import re
 import struct
+from collections import deque
 from collections.abc import Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 import cv2
@@ -195,3 +198,53 @@ def _header_size(f: Path) -> tuple[int, int] | None:
                 fh.seek(length - 2, 1)
     except (OSError, struct.error):
         return None
+
+
+class MaskWriter:
+    """Writes masks as ``folder/00000.png``... (named by frame) on a thread of its own, so
+    that compressing one overlaps making the next; at most ``ahead`` wait.
+
+    Use it as a context manager: leaving it waits for every mask, or, on an error, for the
+    one being written only.
+
+    Raises
+    ------
+    GaitInputError
+        The folder cannot be made, or a mask cannot be written (from the call after it
+        failed, or on leaving).
+    """
+
+    def __init__(self, folder: str | os.PathLike, ahead: int = 8) -> None:
+        self.folder = Path(folder)
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise GaitInputError(f"cannot make the masks folder {self.folder}: "
+                                 f"{exc.strerror or exc}; choose a folder you can write "
+                                 "to") from None
+        self._ahead = max(1, ahead)
+        self._pending: deque[Future] = deque()
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mask-writer")
+
+    def __call__(self, frame: int, mask: np.ndarray) -> None:
+        """Write ``mask`` (rows, cols) uint8 0/255 as frame ``frame``'s PNG."""
+        while len(self._pending) >= self._ahead:
+            self._pending.popleft().result()
+        self._pending.append(self._pool.submit(_write_mask, self.folder / f"{frame:05d}.png",
+                                               mask))
+
+    def __enter__(self) -> MaskWriter:
+        return self
+
+    def __exit__(self, kind, *_) -> None:
+        try:
+            while self._pending and kind is None:
+                self._pending.popleft().result()
+        finally:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _write_mask(path: Path, mask: np.ndarray) -> None:
+    if not cv2.imwrite(str(path), mask):
+        raise GaitInputError(f"cannot write the mask {path}: choose a folder you can write to "
+                             "with room on its disk")

@@ -30,6 +30,7 @@ import cv2
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+from gaitcore.footage.image_folder import MaskWriter
 from gaitcore.footage.sources import FrameSource
 from gaitcore.io.scribbles import write_segmentation_json
 from gaitcore.progress import Progress, report
@@ -432,14 +433,12 @@ def export_masks(session: RotoSession, out_dir: Path, *, source_name: str = "",
     Cancelled
         When ``progress`` returned False.
     """
-    folder = Path(out_dir) / "masks"
     n = session.n_frames
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
+    with MaskWriter(Path(out_dir) / "masks") as write_mask:
         for t in range(n):
-            if not cv2.imwrite(str(folder / f"{t:05d}.png"), session.mask(t)):
-                raise OSError(f"cannot write {folder / f'{t:05d}.png'}")
+            write_mask(t, session.mask(t))
             report(progress, t + 1, n, "mask export cancelled")
+    try:
         write_segmentation_json(Path(out_dir) / "segmentation.json", session.states(),
                                 source=source_name)
     except OSError as exc:

@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 
 from gaitcore.errors import GaitInputError
-from gaitcore.footage.image_folder import iter_mask_folder, list_image_files
+from gaitcore.footage.image_folder import MaskWriter, iter_mask_folder, list_image_files
 from gaitcore.progress import Progress
 from gaitcore.silhouettes.annotations import Rect, Scribble
 from gaitcore.silhouettes.roto import FrameState
@@ -123,16 +123,11 @@ def load_silhouettes(
     from gaitcore.footage.sources import open_frames
     from gaitcore.silhouettes.segmentation import segment_clip
 
-    mask_dir = Path(out_dir) / "masks"
-    mask_dir.mkdir(parents=True, exist_ok=True)
-
-    def write_mask(index: int, mask: np.ndarray) -> None:
-        cv2.imwrite(str(mask_dir / f"{start + index:05d}.png"), mask)
-
-    with open_frames(source, start=start, stop=stop) as frames:
+    with (MaskWriter(Path(out_dir) / "masks") as write_mask,
+          open_frames(source, start=start, stop=stop) as frames):
         if frames.note and note_sink is not None:
             note_sink(frames.note)
         return segment_clip(frames, list(subject), list(background), box=box,
                             scribbles=scribbles, method=method, progress=progress,
-                            mask_sink=write_mask,
+                            mask_sink=lambda index, mask: write_mask(start + index, mask),
                             state_sink=state_sink, max_side=max_side)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from gaitcore.errors import GaitInputError
-from gaitcore.footage.image_folder import iter_mask_folder, read_mask_folder
+from gaitcore.footage.image_folder import MaskWriter, iter_mask_folder, read_mask_folder
 from gaitcore.footage.sources import open_frames
 from gaitcore.silhouettes.annotations import Rect, Stroke
 
@@ -273,6 +273,28 @@ def test_read_mask_folder_bad_inputs(tmp_path):
 
 
 # -- model.py ---------------------------------------------------------------------------
+def test_mask_writer_writes_every_mask_by_frame_number(tmp_path):
+    rng = np.random.default_rng(3)
+    masks = [(rng.random((H, W)) > 0.5).astype(np.uint8) * 255 for _ in range(20)]
+    with MaskWriter(tmp_path / "out" / "masks", ahead=3) as write:
+        for t, m in enumerate(masks):
+            write(10 + t, m)
+    names = sorted(p.name for p in (tmp_path / "out" / "masks").iterdir())
+    assert names == [f"{10 + t:05d}.png" for t in range(20)]
+    assert np.array_equal(read_mask_folder(tmp_path / "out" / "masks") * 255, np.array(masks))
+
+
+def test_mask_writer_says_which_mask_it_could_not_write(tmp_path):
+    (tmp_path / "masks" / "00002.png").mkdir(parents=True)  # a folder where a mask goes
+    with pytest.raises(GaitInputError, match="cannot write the mask .*00002.png"):
+        with MaskWriter(tmp_path / "masks") as write:
+            for t in range(4):
+                write(t, np.zeros((H, W), np.uint8))
+    (tmp_path / "file").write_text("not a folder")
+    with pytest.raises(GaitInputError, match="cannot make the masks folder"):
+        MaskWriter(tmp_path / "file" / "masks")
+
+
 def test_rect_validation_and_clipping():
     assert Rect(-5, 3, 20, 10).clipped_to(10, 10) == Rect(0, 3, 10, 7)
     assert Rect.from_corners(10, 8, 2, 1) == Rect(2, 1, 8, 7)

@@ -269,6 +269,16 @@ def test_segment_command_writes_masks_and_states(tmp_path, capsys):
     assert all(0 <= f["confidence"] <= 1 and f["lost"] is False for f in data["frames"])
 
 
+def test_segment_command_into_a_folder_it_cannot_write_says_so(tmp_path, capsys):
+    frames, truth = scene(3)
+    clip = _write_clip(tmp_path / "clip", frames)
+    (tmp_path / "out").write_text("a file where the output folder should go")
+    b = padded_box(truth[0])
+    assert main(["segment", str(clip), "--out", str(tmp_path / "out"), "--box",
+                 f"{b.x},{b.y},{b.w},{b.h}"]) == 2
+    assert "cannot make the masks folder" in _error_line(capsys)
+
+
 def test_segment_command_starts_from_strokes_on_the_first_frame(tmp_path):
     """As in the app, a subject stroke on frame 0 (with background strokes) is enough: the
     scribbles an artist exported can be run again without a box."""
