@@ -278,3 +278,36 @@ def test_a_box_over_the_whole_frame_says_why_and_keeps_the_box(qtbot, window, ca
     window.tools.segment()
     qtbot.waitUntil(lambda: len(asker.errors) == 2, timeout=60_000)
     assert "fills the whole box" in asker.errors[1] and window.state.project.silhouettes is None
+
+
+def test_real_footage_from_brush_strokes_alone_keeps_the_legs(qtbot, window, shared_data,
+                                                              artifacts_dir):
+    """Muybridge's race horse with no box: a subject stroke along the neck and background
+    strokes on the sky and the ground are enough to segment the clip; the screenshot shows
+    the overlay."""
+    window.open_path(shared_data / "muybridge-race-horse" / "frames")
+    wait_ready(qtbot, window, timeout_ms=60_000)
+    window.tools.pen.setValue(8)
+    for tool, points in ((Tool.SUBJECT_BRUSH, [(565, 175), (620, 174), (675, 172)]),
+                         (Tool.BACKGROUND_BRUSH, [(20, 45), (480, 45), (940, 45)]),
+                         (Tool.BACKGROUND_BRUSH, [(660, 400), (800, 400), (940, 400)])):
+        _paint(qtbot, window, tool, 0, points)
+    assert window.state.project.box is None
+    job = window.tools.segment()
+    with qtbot.waitSignal(job.succeeded, timeout=120_000):
+        pass
+    wait_ready(qtbot, window, timeout_ms=60_000)
+    sil = window.state.project.silhouettes
+    assert not sil.roi.lost.any()
+    rows = sil.roi.crops.shape[1]
+    lower = sil.roi.crops[:, 2 * rows // 3 :, :].sum(axis=(1, 2))
+    assert (lower > 0.02 * sil.roi.crops[:, :2 * rows // 3, :].sum(axis=(1, 2))).all(), lower
+    for name, dock in window.docks.items():
+        if name != "timeline":
+            dock.close()
+    window.viewport.hide()
+    window.state.set_frame(5)
+    qtbot.waitUntil(lambda: window.frame_view.shown_frame == 5)
+    qtbot.wait(200)
+    wait_ready(qtbot, window)
+    window.grab().save(str(artifacts_dir / "app_real_footage_from_strokes.png"))
