@@ -123,8 +123,8 @@ def load_silhouettes(
     from gaitcore.footage.sources import open_frames
     from gaitcore.silhouettes.segmentation import segment_clip
 
-    with (MaskWriter(Path(out_dir) / "masks") as write_mask,
-          open_frames(source, start=start, stop=stop) as frames):
+    with (open_frames(source, start=start, stop=stop) as frames,
+          MaskWriter(Path(out_dir) / "masks") as write_mask):
         if frames.note and note_sink is not None:
             note_sink(frames.note)
         return segment_clip(frames, list(subject), list(background), box=box,

@@ -279,6 +279,13 @@ def test_segment_command_into_a_folder_it_cannot_write_says_so(tmp_path, capsys)
     assert "cannot make the masks folder" in _error_line(capsys)
 
 
+def test_segment_command_on_an_unreadable_video_leaves_no_masks_folder(tmp_path, capsys):
+    (tmp_path / "clip.mp4").write_bytes(b"not a video at all" * 100)
+    assert main(["segment", str(tmp_path / "clip.mp4"), "--out", str(tmp_path / "out"),
+                 "--box", "10,10,40,30"]) == 2
+    assert _error_line(capsys) and not (tmp_path / "out" / "masks").exists()
+
+
 def test_segment_command_starts_from_strokes_on_the_first_frame(tmp_path):
     """As in the app, a subject stroke on frame 0 (with background strokes) is enough: the
     scribbles an artist exported can be run again without a box."""
