@@ -255,16 +255,14 @@ class RotoSegmentation:
         allp = np.concatenate(pts)
         extent = float(max(np.ptp(allp[:, 0]), np.ptp(allp[:, 1]), 8.0))
         work = WorkingSize.for_subject(first.shape[:2], 2.0 * extent, self.s)
-        small = work.shrink(first)
         if self.subject_rects and self.background_rects:
-            _, _, w, h = self._box_from_rects(work, small, *self._rect_masks(work))[0]
-            return max(extent, max(w, h) / work.scale)
-        subject, background = self._stroke_masks(0, work)
-        model = (None if subject is None or background is None
-                 else ColourModel.fit_masks(small, subject, background))
-        if model is None:
+            marks = self._rect_masks(work)
+        else:
+            marks = self._stroke_masks(0, work)
+        found = self._box_from_marks(work.shrink(first), *marks)
+        if found is None:
             return 2.0 * extent
-        _, _, w, h = self._box_from_marks(small, model, subject, background)[0]
+        _, _, w, h = found[0]
         return max(extent, max(w, h) / work.scale)
 
     def _rect_masks(self, work: WorkingSize) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -319,12 +317,18 @@ class RotoSegmentation:
         box = None if self.box is None else self.work.box(self.box.as_tuple())
         residuals: list[np.ndarray] = []
         seed = None
-        if box is None and self.subject_rects and self.background_rects:
-            box, seed = self._box_from_rects(self.work, small, rects_fg, rects_bg)
-        elif box is not None and self.s.motion_offsets:
+        if box is not None and self.s.motion_offsets:
             later = [self.work.shrink(check_frame(self.source[k]))
                      for k in self.s.motion_offsets if k < self.n]
             residuals = motion_residuals(small, later, box)
+        elif box is None and self.subject_rects and self.background_rects:
+            found = self._box_from_marks(small, rects_fg, rects_bg)
+            if found is None:
+                raise GaitInputError(
+                    "the subject or the background rectangles hold fewer than 16 pixels of "
+                    "their own (do subject and background rectangles overlap?): draw larger, "
+                    "separate rectangles")
+            box, seed = found
         fg = _union(subject, rects_fg)
         bg = _union(background, rects_bg)
         if fg is not None and bg is not None:
@@ -332,18 +336,17 @@ class RotoSegmentation:
         return cut_first(small, box, residuals=residuals, seed=seed, subject=fg, background=bg,
                          settings=self.s)
 
-    def _box_from_rects(self, work: WorkingSize, small: np.ndarray, fg: np.ndarray,
-                        bg: np.ndarray):
-        """The paper's rectangles as a box and a seed at ``work``'s size
-        (:meth:`_box_from_marks` with paper 2.2's mixture model of the rectangles)."""
-        model = ColourModel.fit(small, [_scaled(r, work.scale) for r in self.subject_rects],
-                                [_scaled(r, work.scale) for r in self.background_rects])
-        return self._box_from_marks(small, model, fg, bg)
-
     @staticmethod
-    def _box_from_marks(small: np.ndarray, model: ColourModel, fg: np.ndarray, bg: np.ndarray):
-        """The subject-coloured components (by ``model``) under the subject marks ``fg``, never
-        under the background marks ``bg``, and their bounding box grown by a tenth."""
+    def _box_from_marks(small: np.ndarray, fg: np.ndarray | None, bg: np.ndarray | None
+                        ) -> tuple[tuple[int, int, int, int], np.ndarray] | None:
+        """Subject and background marks (the paper's rectangles, or brush strokes) as a box and
+        a seed: the subject-coloured components (paper 2.2's mixture model, fitted to the
+        marks) under the subject marks ``fg``, never under the background marks ``bg``, and
+        their bounding box grown by a tenth. None when either kind of mark is missing or
+        too small to fit a colour model to."""
+        model = None if fg is None or bg is None else ColourModel.fit_masks(small, fg, bg)
+        if model is None:
+            return None
         guess = ((model.posterior(small) > 127) & ~bg) | fg
         guess = keep_overlapping(cv2.morphologyEx(guess.astype(np.uint8), cv2.MORPH_OPEN,
                                                   np.ones((3, 3), np.uint8)) | fg, fg,
@@ -513,11 +516,6 @@ def _union(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
     if a is None:
         return b
     return a if b is None else a | b
-
-
-def _scaled(r: Rect, scale: float) -> Rect:
-    return Rect(int(r.x * scale), int(r.y * scale), max(1, round(r.w * scale)),
-                max(1, round(r.h * scale)))
 
 
 def segment_roto(source, *, progress: Progress | None = None,

@@ -49,6 +49,26 @@ def _paint(qtbot, window, tool, frame, points):
     wait_ready(qtbot, window)
 
 
+def _assert_no_frame_lost_and_legs(sil):
+    """No frame lost, and the legs: the lower third of each silhouette's window is not
+    empty."""
+    assert not sil.roi.lost.any()
+    rows = sil.roi.crops.shape[1]
+    lower = sil.roi.crops[:, 2 * rows // 3 :, :].sum(axis=(1, 2))
+    assert (lower > 0.02 * sil.roi.crops[:, :2 * rows // 3, :].sum(axis=(1, 2))).all(), lower
+
+
+def _screenshot_of_the_footage(qtbot, window, path):
+    """The window with the footage large (the docks of posing away) saved to ``path``."""
+    for name, dock in window.docks.items():
+        if name != "timeline":
+            dock.close()
+    window.viewport.hide()
+    qtbot.wait(200)
+    wait_ready(qtbot, window)
+    window.grab().save(str(path))
+
+
 def _same_outside(a, b, first, stop):
     """Silhouettes ``a`` and ``b`` agree on every frame outside ``first <= t < stop``."""
     outside = np.r_[0:first, stop:a.n_frames]
@@ -211,25 +231,14 @@ def test_real_footage_box_and_a_correction_keep_the_legs(qtbot, window, shared_d
     with qtbot.waitSignal(job.succeeded, timeout=120_000):
         pass
     wait_ready(qtbot, window, timeout_ms=60_000)
-    sil = window.state.project.silhouettes
-    assert not sil.roi.lost.any()
-    # The legs: the lower third of each silhouette's window is not empty.
-    rows = sil.roi.crops.shape[1]
-    lower = sil.roi.crops[:, 2 * rows // 3 :, :].sum(axis=(1, 2))
-    assert (lower > 0.02 * sil.roi.crops[:, :2 * rows // 3, :].sum(axis=(1, 2))).all(), lower
+    _assert_no_frame_lost_and_legs(window.state.project.silhouettes)
     before = window.state.project.silhouettes
     window.tools.pen.setValue(14)
     _paint(qtbot, window, Tool.BACKGROUND_BRUSH, 7, [(10, 528), (250, 528), (480, 528)])
     after = window.state.project.silhouettes
     assert window.state.project.corrected_frames() == (7,)
     assert after.roi.crops[7].sum() <= before.roi.crops[7].sum()
-    for name, dock in window.docks.items():  # the footage large: the docks of posing away
-        if name != "timeline":
-            dock.close()
-    window.viewport.hide()
-    qtbot.wait(200)
-    wait_ready(qtbot, window)
-    window.grab().save(str(artifacts_dir / "app_real_footage_legs.png"))
+    _screenshot_of_the_footage(qtbot, window, artifacts_dir / "app_real_footage_legs.png")
 
 
 SKETCH_0 = [  # rough strokes over the canter's frame 0: spine to head, ear, tail, four legs
@@ -297,17 +306,7 @@ def test_real_footage_from_brush_strokes_alone_keeps_the_legs(qtbot, window, sha
     with qtbot.waitSignal(job.succeeded, timeout=120_000):
         pass
     wait_ready(qtbot, window, timeout_ms=60_000)
-    sil = window.state.project.silhouettes
-    assert not sil.roi.lost.any()
-    rows = sil.roi.crops.shape[1]
-    lower = sil.roi.crops[:, 2 * rows // 3 :, :].sum(axis=(1, 2))
-    assert (lower > 0.02 * sil.roi.crops[:, :2 * rows // 3, :].sum(axis=(1, 2))).all(), lower
-    for name, dock in window.docks.items():
-        if name != "timeline":
-            dock.close()
-    window.viewport.hide()
+    _assert_no_frame_lost_and_legs(window.state.project.silhouettes)
     window.state.set_frame(5)
     qtbot.waitUntil(lambda: window.frame_view.shown_frame == 5)
-    qtbot.wait(200)
-    wait_ready(qtbot, window)
-    window.grab().save(str(artifacts_dir / "app_real_footage_from_strokes.png"))
+    _screenshot_of_the_footage(qtbot, window, artifacts_dir / "app_real_footage_from_strokes.png")
