@@ -360,20 +360,20 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
     prob = cv2.remap(mask[y0:y1, x0:x1].astype(np.float32), map_x, map_y, cv2.INTER_LINEAR,
                      borderMode=cv2.BORDER_CONSTANT, borderValue=0)
     came = cv2.remap(b, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    background = _background(a, prob)
-    exposure = _exposure(came, a, background & _measurable(came), settings)
+    grid = (slice(0, None, 2), slice(0, None, 2))  # a quarter of the pixels tell the levels
+    background = _background(a[grid], prob[grid])
+    exposure = _exposure(came[grid], a[grid], background & _measurable(came[grid]), settings)
     residual = cv2.GaussianBlur(np.abs(a - np.float32(exposure) * came), (0, 0), 1.5)
     trust = np.exp(-np.square(residual / settings.trust_grey))
     warp = Warp(cv2.GaussianBlur(prob, (0, 0), 1.0), trust, (x0, y0, x1, y1), exposure,
-                _background_level(a, background))
+                _background_level(a[grid], background))
     if colours is None:
         return warp
-    grid = (slice(0, None, 2), slice(0, None, 2))  # a quarter of the pixels tell it as well
     here = np.ascontiguousarray(colours[1][y0:y1, x0:x1][grid])
     came_bgr = cv2.remap(np.ascontiguousarray(colours[0][y0:y1, x0:x1]), map_x[grid],
                          map_y[grid], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    return replace(warp, balance=_balance(came_bgr, here, background[grid], settings),
-                   balance_level=_balance_level(here, background[grid]))
+    return replace(warp, balance=_balance(came_bgr, here, background, settings),
+                   balance_level=_balance_level(here, background))
 
 
 def _measurable(image: np.ndarray) -> np.ndarray:
