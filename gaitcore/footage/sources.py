@@ -263,7 +263,7 @@ class FrameSource:
             When a frame cannot be decoded (truncated file).
         """
         if prefetch > 0:
-            return _prefetched(self._iter_frames(start, stop), prefetch)
+            return prefetched(self._iter_frames(start, stop), prefetch)
         return self._iter_frames(start, stop)
 
     def _decoded(self, reader: _VideoReader, i: int) -> np.ndarray:
@@ -386,7 +386,7 @@ def video_fps(path: str | os.PathLike) -> float | None:
 
 
 # -- helpers ---------------------------------------------------------------------------
-def _prefetched(items: Iterator, depth: int) -> Iterator:
+def prefetched(items: Iterator, depth: int) -> Iterator:
     """Run ``items`` on a daemon thread, ``depth`` items ahead; errors reach the consumer."""
     q: queue.Queue = queue.Queue(maxsize=depth)
     stop = threading.Event()

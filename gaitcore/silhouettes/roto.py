@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+from gaitcore.footage.sources import prefetched
 from gaitcore.progress import Progress, report
 from gaitcore.silhouettes.annotations import Rect, Scribble, check_scribbles, check_start
 from gaitcore.silhouettes.colour_model import ColourModel, check_frame, rect_mask
@@ -398,11 +399,16 @@ class RotoSegmentation:
         return (k if prev is None else prev + 1), nxt
 
     def _frames(self, start: int, stop: int) -> Iterator[tuple[int, np.ndarray]]:
-        """Working-size frames ``start <= t < stop`` in order."""
+        """Working-size frames ``start <= t < stop`` in order, decoded and shrunk on a
+        thread of their own a few frames ahead (OpenCV lets go of the GIL in both)."""
         if hasattr(self.source, "iter_frames"):
-            stream = self.source.iter_frames(start, stop, prefetch=4)
+            stream = self.source.iter_frames(start, stop)
         else:
             stream = ((t, self.source[t]) for t in range(start, stop))
+        return prefetched(self._shrunk(stream), 4)
+
+    def _shrunk(self, stream: Iterator[tuple[int, np.ndarray]]
+                ) -> Iterator[tuple[int, np.ndarray]]:
         try:
             for t, img in stream:
                 img = check_frame(img)
