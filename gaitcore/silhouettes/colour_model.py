@@ -253,10 +253,14 @@ class ColourTable:
         Clipped to [-8, 8].
     bits : int
         Bits kept per BGR channel.
+    gap : float
+        How far apart the two sides of the frame it was learnt on stand under it
+        (:func:`colour_gap`); 0 when not known.
     """
 
     llr: np.ndarray
     bits: int = 5
+    gap: float = 0.0
 
     def __call__(self, image: np.ndarray) -> np.ndarray:
         """The ratio of every pixel of a BGR uint8 image, shape (rows, cols), float32."""
@@ -286,7 +290,18 @@ def learn_colours(image: np.ndarray, mask: np.ndarray) -> ColourTable | None:
     fgd, bgd = mixtures
     centres = bin_centres_bgr(6)
     llr = _mixture_loglik(fgd, centres) - _mixture_loglik(bgd, centres)
-    return ColourTable(np.clip(llr, -8, 8).astype(np.float32), 6)
+    table = ColourTable(np.clip(llr, -8, 8).astype(np.float32), 6)
+    return replace(table, gap=colour_gap(table(image), mask > 0))
+
+
+def colour_gap(ratios: np.ndarray, mask: np.ndarray) -> float:
+    """The mean of a :class:`ColourTable`'s ratios over a mask's pixels less their mean over
+    the others (0 when either side is empty): how far apart the two sides stand."""
+    inside = ratios[mask]
+    outside = ratios[~mask]
+    if not inside.size or not outside.size:
+        return 0.0
+    return float(inside.mean() - outside.mean())
 
 
 def colour_separation(image: np.ndarray, mask: np.ndarray) -> float:
