@@ -564,6 +564,41 @@ def test_a_cut_that_took_ground_or_left_legs_out_separates_its_colours_worse():
     assert best > _separation(img, left, box) + 0.2
 
 
+@pytest.mark.parametrize(("moving", "cuts"), [
+    (np.s_[40:80, 50:110], ["seeded"]),  # the body moves: its seeded cut spans the box
+    (np.s_[28:48, 30:52], ["seeded", "whole box"]),  # a corner moves: its cut spans nothing
+])
+def test_the_whole_box_is_cut_only_when_no_motion_seeded_cut_spans_it(monkeypatch, moving,
+                                                                     cuts):
+    """Over nine real first frames with motion seeds, the cut from the whole box never won
+    (its own colours separated worse: it takes the ground between the legs), and it was one
+    more GrabCut of a second on the first frame. It is cut only when no seeded cut spans its
+    box, and the subject is found either way."""
+    from gaitcore.silhouettes import keyframe
+    from gaitcore.silhouettes.propagate import PropagationSettings
+
+    rng = np.random.default_rng(3)
+    green, brown = np.array([60, 140, 70]), np.array([40, 80, 160])
+    img = np.clip(rng.normal(green, 10, (120, 160, 3)), 0, 255).astype(np.uint8)
+    body = np.zeros((120, 160), np.uint8)
+    cv2.ellipse(body, (80, 60), (40, 25), 0, 0, 360, 1, -1)
+    img[body > 0] = np.clip(rng.normal(brown, 10, (int(body.sum()), 3)), 0, 255)
+    residual = np.zeros((120, 160), np.float32)
+    residual[moving] = 3.0
+    starts: list[str] = []
+    cut_labels = keyframe._cut_labels
+
+    def spy(small, box, seed, *args):
+        starts.append("whole box" if seed is None else "seeded")
+        return cut_labels(small, box, seed, *args)
+
+    monkeypatch.setattr(keyframe, "_cut_labels", spy)
+    mask = keyframe.cut_first(img, (30, 28, 100, 64), residuals=[residual],
+                              settings=PropagationSettings())
+    assert starts == cuts
+    assert overlap(mask, body) > 0.95
+
+
 def test_the_first_cut_does_not_hang_on_one_choice_of_motion_seeds(shared_data):
     """DAVIS dog taken every second frame: the motion over frames 2, 6 and 12 (the default
     offsets) spreads into the fence on the box's top edge, and the cut it seeds takes the
