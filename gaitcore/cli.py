@@ -138,7 +138,7 @@ def _run_analyze(args: argparse.Namespace) -> int:
         sel = analysis.selection
         start, stop = analysis.frame_range
         print(f"frames: {analysis.n_frames}, {start} to {stop - 1} "
-              f"(subject lost in {len(analysis.lost_frames)})")
+              f"(subject lost in {len(analysis.lost_frames)} of them)")
         print("variance: " + " ".join(f"{100 * v:.1f}%" for v in analysis.pca.variance_ratio))
         print("r per PC: " + " ".join(f"{r:.2f}" for r in d.correlations))
         print(f"period: {d.period_frames:.1f} frames; verdict: {d.verdict.value}: {d.reason}")

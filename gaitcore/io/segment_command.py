@@ -95,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
         write_segmentation_json(args.out / "segmentation.json", ordered, source=str(args.input))
     lost = int(roi.lost.sum())
     corrected = sum(st.corrected for st in ordered)
-    print(f"frames: {len(roi.lost)} (subject lost in {lost}, corrected {corrected})")
+    print(f"frames: {len(roi.lost)} (subject lost in {lost} of them, corrected {corrected})")
     print(f"wrote {args.out / 'masks'}" + (f" and {args.out / 'segmentation.json'}"
                                            if ordered else ""))
     return 0
