@@ -586,7 +586,7 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
     cut = (Cut(mask, overlap(mask, inside))
            if settings.max_shrink * prior_area <= area <= settings.max_growth * prior_area
            else Cut(inside, 0.0))
-    if colour_gap(ratios, cut.mask > 0) < settings.lost_gap * colours.gap:
+    if colours.gap > 0 and colour_gap(ratios, cut.mask > 0) < settings.lost_gap * colours.gap:
         return gone  # it no longer stands out from its surroundings: it slid onto them
     return cut
 
