@@ -290,8 +290,8 @@ def learn_colours(image: np.ndarray, mask: np.ndarray) -> ColourTable | None:
     fgd, bgd = mixtures
     centres = bin_centres_bgr(6)
     llr = _mixture_loglik(fgd, centres) - _mixture_loglik(bgd, centres)
-    table = ColourTable(np.clip(llr, -8, 8).astype(np.float32), 6)
-    return replace(table, gap=colour_gap(table(image), mask > 0))
+    llr = np.clip(llr, -8, 8).astype(np.float32)
+    return ColourTable(llr, 6, colour_gap(llr[bin_index(image, 6)], mask > 0))
 
 
 def colour_gap(ratios: np.ndarray, mask: np.ndarray) -> float:

@@ -148,9 +148,12 @@ def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndar
         median = [np.median(residuals, axis=0)] if len(residuals) > 1 else []
         seeds = [m for m in (_moving(r, inside) for r in [*median, *residuals]) if m is not None]
     whole: tuple[Box, np.ndarray | None] = (box, None)
-    starts: list[tuple[Box, np.ndarray | None]] = [] if seed is None and seeds else [whole]
+    with_whole = seed is not None or not seeds
+    starts: list[tuple[Box, np.ndarray | None]] = [whole] if with_whole else []
+    kept: list[np.ndarray] = []
     for moving in seeds:
-        if not any(overlap(moving, other) > _SAME_SEEDS for _, other in starts if other is not None):
+        if not any(overlap(moving, other) > _SAME_SEEDS for other in kept):
+            kept.append(moving)
             starts.append((_in_from_edges(box, moving) if seed is None else box, moving))
 
     def cut(start: tuple[Box, np.ndarray | None]) -> np.ndarray:
@@ -161,7 +164,7 @@ def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndar
     cuts = [mask for mask, (around, _) in zip(masks, starts) if _spans(mask, around)]
     if cuts:
         return max(cuts, key=lambda mask: _separation(small, mask, box))
-    return masks[0] if starts[0] is whole else cut(whole)
+    return masks[0] if with_whole else cut(whole)
 
 
 def _learning_window(box: Box) -> tuple[slice, slice]:

@@ -580,15 +580,16 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
     mask = keep_overlapping((evidence > 0).astype(np.uint8), inside, least=TOUCHING)
     mask = _near_body(mask, max(1, round(settings.part_gap_frac * side)))
     area, prior_area = float(mask.sum()), float(inside.sum())
-    gone = Cut(np.zeros_like(inside), 0.0)
-    if area < settings.max_shrink * prior_area and np.median(evidence[inside > 0]) < 0:
-        return gone  # nothing there looks like the subject
-    cut = (Cut(mask, overlap(mask, inside))
-           if settings.max_shrink * prior_area <= area <= settings.max_growth * prior_area
-           else Cut(inside, 0.0))
-    if colours.gap > 0 and colour_gap(ratios, cut.mask > 0) < settings.lost_gap * colours.gap:
-        return gone  # it no longer stands out from its surroundings: it slid onto them
-    return cut
+    # Gone: nothing there looks like the subject, or the mask kept no longer stands out from
+    # its surroundings (it slid onto them).
+    gone = area < settings.max_shrink * prior_area and np.median(evidence[inside > 0]) < 0
+    if not gone:
+        cut = (Cut(mask, overlap(mask, inside))
+               if settings.max_shrink * prior_area <= area <= settings.max_growth * prior_area
+               else Cut(inside, 0.0))
+        gone = (colours.gap > 0
+                and colour_gap(ratios, cut.mask > 0) < settings.lost_gap * colours.gap)
+    return Cut(np.zeros_like(inside), 0.0) if gone else cut
 
 
 def _log_odds(p: np.ndarray, floor: float) -> np.ndarray:
