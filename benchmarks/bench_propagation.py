@@ -6,8 +6,9 @@ carried ten frames forward, as :class:`gaitcore.silhouettes.roto.RotoSegmentatio
 key frame's cut (:func:`~gaitcore.silhouettes.propagate.warp_mask`, then
 :func:`~gaitcore.silhouettes.propagate.fuse_cut` with the key's colours); the IoU with the
 reference is averaged by distance from the key. Rows: the default settings, the rule before
-the flow's trust (the warped mask blurred and weighed alike everywhere), and the warped mask
-alone (no colour), each measured in the same run.
+the motion cue (colour and the warped mask only), the rule before the flow's trust (the warped
+mask blurred and weighed alike everywhere, no motion cue), and the warped mask alone (no
+colour), each measured in the same run.
 
 Run ``python -m benchmarks propagation`` to print the table and record it.
 """
@@ -34,9 +35,11 @@ from gaitcore.silhouettes.propagate import (
 
 SPACING, REACH = 5, 10
 RULES: dict[str, PropagationSettings] = {
-    "default (the flow trusted where the warped frame matches)": PropagationSettings(),
+    "default (the flow trusted where the warped frame matches; the motion cue)":
+        PropagationSettings(),
+    "before: no motion cue": PropagationSettings(motion_weight=0.0),
     "before: the flow trusted nowhere (warped mask blurred, weight 1, everywhere)":
-        PropagationSettings(trust_grey=1e-3),
+        PropagationSettings(trust_grey=1e-3, motion_weight=0.0),
 }
 
 
@@ -64,7 +67,7 @@ def run() -> list[Section]:
     return [Section(title, headers, rows, notes)]
 
 
-def _warp_only(small, prior, trust, colours, settings) -> Cut:
+def _warp_only(small, prior, trust, colours, settings, motion) -> Cut:
     return Cut((prior > 0.5).astype(np.uint8), 1.0)
 
 
@@ -83,7 +86,8 @@ def _carried(frames: list[np.ndarray], refs: list[np.ndarray], box, settings: Pr
         for t in range(key + 1, min(key + REACH + 1, len(refs))):
             warp = warp_mask(mask, grey[t - 1], grey[t], flow_of, settings)
             x0, y0, x1, y1 = warp.window
-            cut = decide(small[t][y0:y1, x0:x1], warp.prob, warp.trust, colours, settings)
+            cut = decide(small[t][y0:y1, x0:x1], warp.prob, warp.trust, colours, settings,
+                         warp.motion)
             mask = np.zeros_like(mask)
             mask[y0:y1, x0:x1] = cut.mask
             full = work.enlarge(mask)

@@ -10,8 +10,10 @@ is brought to about ``subject_side_px`` pixels, enough to keep thin legs while s
   the image's edges: the mask follows legs and snaps to edges. Where the flow is trusted (the
   previous frame, warped by it, matches this one) the prior is sharp and strong, so a thin leg
   the flow carried well is not given away to an ambiguous colour; elsewhere it is blurred and
-  weak, and colour decides. Parts of the mask that drift away from the body (background the
-  flow carried along) are dropped.
+  weak, and colour decides. Colour is helped by motion: what moves unlike the ground (the
+  camera's and the ground's motion, a homography fitted to the flow off the mask) is more
+  likely the subject (:func:`motion_ratios`). Parts of the mask that drift away from the body
+  (background the flow carried along) are dropped.
 - A result whose area jumps away from the warped mask's (a flood into the ground, or a
   collapse) is refused: the warped mask is kept and the frame marked as not confident. When
   the warped pixels stop looking like the subject, or the mask stops standing out from its
@@ -105,6 +107,13 @@ class PropagationSettings:
     trust_grey : float
         The flow's trust at a pixel is exp(-(r / trust_grey)**2), with r the grey-level
         difference between this frame and the previous one warped by the flow (blurred).
+    motion_weight : float
+        Weight of the motion cue (:func:`motion_ratios`: how unlike the ground a pixel
+        moves) against colour on a propagated frame. Colour alone lost the shaded flank of
+        DAVIS dog as it turned (colours its key frame never saw). Over eight DAVIS clips each
+        started on frames 0, 15 and 30, from the box, 0.3 took the mean IoU of bear, dog and
+        goat from 0.800 to 0.810, and of the five others from 0.639 to 0.640 (0.2 and 0.45,
+        in a prototype: 0.805 / 0.639 and 0.816 / 0.637).
     lost_gap : float
         A propagated frame whose mask stands out from its surroundings, under its key frame's
         colours (:func:`~gaitcore.silhouettes.colour_model.colour_gap`), less than this share
@@ -152,6 +161,7 @@ class PropagationSettings:
     stroke_reach: float = 2.0
     stroke_zone_frac: float = 0.1
     part_gap_frac: float = 0.04
+    motion_weight: float = 0.3
     lost_gap: float = 0.6
     match_exposure: bool = True
     exposure_pull: float = 0.05
@@ -320,6 +330,8 @@ class Warp:
         measured; see :func:`_balance`).
     balance_level : ndarray of shape (3,) or None
         The background's colour in the window (:func:`_balance_level`).
+    motion : ndarray of shape (h, w), float32, or None
+        The motion cue (:func:`motion_ratios`); None when it could not be learnt.
     """
 
     prob: np.ndarray
@@ -329,6 +341,7 @@ class Warp:
     level: float | None = None
     balance: np.ndarray = field(default_factory=lambda: np.zeros(3))
     balance_level: np.ndarray | None = None
+    motion: np.ndarray | None = None
 
 
 def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
@@ -382,8 +395,10 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
                          background[levels] & _measurable(came[levels]), settings)
     residual = cv2.GaussianBlur(np.abs(a - np.float32(exposure) * came), (0, 0), 1.5)
     trust = np.exp(-np.square(residual / settings.trust_grey))
-    warp = Warp(cv2.GaussianBlur(prob, (0, 0), 1.0), trust, (x0, y0, x1, y1), exposure,
-                _background_level(a[levels], background[levels]))
+    prob = cv2.GaussianBlur(prob, (0, 0), 1.0)
+    warp = Warp(prob, trust, (x0, y0, x1, y1), exposure,
+                _background_level(a[levels], background[levels]),
+                motion=motion_ratios(flow, prob) if settings.motion_weight > 0 else None)
     if colours is None:
         return warp
     here = np.ascontiguousarray(colours[1][y0:y1, x0:x1][grid])
@@ -391,6 +406,67 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
                          map_y[grid], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     return replace(warp, balance=_balance(came_bgr, here, background[grid], settings),
                    balance_level=_balance_level(here, background[grid]))
+
+
+_MOTION_BINS = 17
+"""Bins of :func:`motion_ratios`: half octaves of the departure from the background's motion,
+from 0.044 pixel (and less) to 16 pixels (and more)."""
+
+
+def motion_ratios(flow: np.ndarray, prob: np.ndarray) -> np.ndarray | None:
+    """How much more likely each pixel's motion is on the subject than on the background.
+
+    Parameters
+    ----------
+    flow : ndarray of shape (h, w, 2), float32
+        The flow from this frame to the previous one in the window.
+    prob : ndarray of shape (h, w), float32
+        The warped mask in [0, 1].
+
+    Returns
+    -------
+    ndarray of shape (h, w), float32, or None
+        Log-likelihood ratios within +-3; None when either side of the warped mask has too
+        few pixels to learn from, or the background's motion cannot be fitted.
+
+    Notes
+    -----
+    The background's motion (the camera's, with the ground) is a homography fitted by RANSAC
+    to the flow off the warped mask (every sixth pixel each way); each pixel's departure from
+    it is binned in half octaves (:data:`_MOTION_BINS`), and the bins' ratio is learnt on this
+    very frame from the warped mask's sure sides (above 0.9, below 0.02). It is learnt again
+    every frame because the cue comes and goes: strong while the animal moves across the
+    ground (or the camera pans along it), nothing while it stands still, when the two
+    histograms agree and the ratios are near 0.
+
+    The cue is coarse (a flow is smooth across edges) and, weighed by ``motion_weight``, weak
+    beside the warped mask: it tips the pixels near the mask's edge and where colour is
+    unsure. A foot planted on the ground moves as the ground does, and is tipped towards the
+    background as well.
+    """
+    rows, cols = prob.shape
+    off = prob < 0.02
+    ys, xs = np.nonzero(off[::6, ::6])
+    if ys.size < 32 or np.count_nonzero(prob > 0.9) < 16:
+        return None
+    points = np.stack([xs, ys], 1).astype(np.float32) * 6
+    homography, _ = cv2.findHomography(points, points + flow[ys * 6, xs * 6], cv2.RANSAC, 1.0)
+    if homography is None:
+        return None
+    # Every second pixel each way: the flow is smooth at that scale, and it is 4 times cheaper.
+    h = homography.astype(np.float32)
+    gy, gx = np.mgrid[0:rows:2, 0:cols:2].astype(np.float32)
+    z = h[2, 0] * gx + h[2, 1] * gy + h[2, 2]
+    dx = flow[::2, ::2, 0] - ((h[0, 0] * gx + h[0, 1] * gy + h[0, 2]) / z - gx)
+    dy = flow[::2, ::2, 1] - ((h[1, 0] * gx + h[1, 1] * gy + h[1, 2]) / z - gy)
+    departure = np.log2(np.sqrt(dx * dx + dy * dy) + np.float32(0.05))
+    bins = np.clip((departure + np.float32(4.5)) * 2, 0, _MOTION_BINS - 1).astype(np.intp)
+    half = prob[::2, ::2]
+    subject = np.bincount(bins[half > 0.9], minlength=_MOTION_BINS) + 1.0
+    background = np.bincount(bins[half < 0.02], minlength=_MOTION_BINS) + 1.0
+    ratios = np.log(subject / subject.sum()) - np.log(background / background.sum())
+    return cv2.resize(np.clip(ratios, -3, 3).astype(np.float32)[bins], (cols, rows),
+                      interpolation=cv2.INTER_LINEAR)
 
 
 def _measurable(image: np.ndarray) -> np.ndarray:
@@ -535,7 +611,7 @@ def exposed(small: np.ndarray, gains: float | Sequence[float] | np.ndarray) -> n
 
 
 def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: ColourTable,
-             settings: PropagationSettings) -> Cut:
+             settings: PropagationSettings, motion: np.ndarray | None = None) -> Cut:
     """Decide one window of a propagated frame from its colours and the warped mask.
 
     Parameters
@@ -550,6 +626,8 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
         Learnt on the key frame the mask was carried from, and kept: what that frame (and the
         artist's strokes there) taught is not forgotten frame after frame, and cannot drift.
     settings : PropagationSettings
+    motion : ndarray of shape (h, w), float32, optional
+        The motion cue (:attr:`Warp.motion`), weighed by ``motion_weight``.
 
     Returns
     -------
@@ -562,10 +640,11 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
 
     Notes
     -----
-    Per pixel, the evidence for "subject" is the colour log-likelihood ratio plus the warped
-    mask's log-odds: ``trusted_prior_weight`` times those of the mask as warped (kept
-    within those of 0.1 and 0.9, so a strong colour can still turn a pixel the flow carried
-    wrong), where the flow is trusted, and ``prior_weight`` times those of the mask blurred by
+    Per pixel, the evidence for "subject" is the colour log-likelihood ratio, plus
+    ``motion_weight`` times the motion's (when given), plus the warped mask's log-odds:
+    ``trusted_prior_weight`` times those of the mask as warped (kept within those of 0.1 and
+    0.9, so a strong colour can still turn a pixel the flow carried wrong), where the flow is
+    trusted, and ``prior_weight`` times those of the mask blurred by
     ``prior_blur_frac`` of the subject's side (how far the flow may be wrong) where it is
     not, mixed by the trust. A guided filter (He et al. 2013) guided by the frame smooths the
     evidence along the image's edges, and the sign decides. This replaces the graph cut on
@@ -581,7 +660,8 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
                       0.02)
     sharp = _log_odds(prior, 0.1)
     ratios = colours(small)
-    evidence = (ratios + trust * (settings.trusted_prior_weight * sharp)
+    cues = ratios if motion is None else ratios + np.float32(settings.motion_weight) * motion
+    evidence = (cues + trust * (settings.trusted_prior_weight * sharp)
                 + (1 - trust) * (settings.prior_weight * loose))
     evidence = cv2.ximgproc.guidedFilter(np.ascontiguousarray(small), evidence,
                                          max(1, round(settings.smooth_frac * side)), 4.0)

@@ -468,7 +468,7 @@ class RotoSegmentation:
         gains = exposure.step(warp)
         x0, y0, x1, y1 = warp.window
         cut = fuse_cut(exposed(small[y0:y1, x0:x1], gains), warp.prob, warp.trust, models,
-                       self.s)
+                       self.s, warp.motion)
         out = np.zeros_like(mask)
         out[y0:y1, x0:x1] = cut.mask
         return Cut(out, cut.confidence)
