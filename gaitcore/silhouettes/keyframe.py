@@ -27,6 +27,7 @@ from gaitcore.silhouettes.propagate import (
     Box,
     Cut,
     PropagationSettings,
+    camera_departure,
     disk,
     overlap,
 )
@@ -69,34 +70,18 @@ def motion_residuals(first: np.ndarray, later: list[np.ndarray], box: Box) -> li
         outside the box (a far and a near plane of the scene).
     """
     grey = cv2.cvtColor(first, cv2.COLOR_BGR2GRAY)
-    rows, cols = grey.shape
     x, y, w, h = box
-    outside = np.ones((rows, cols), bool)
+    outside = np.ones(grey.shape, bool)
     outside[y : y + h, x : x + w] = False
-    ys, xs = np.mgrid[0:rows:4, 0:cols:4]
-    sel = outside[ys, xs]
-    if sel.sum() < 64:
+    if np.count_nonzero(outside[::4, ::4]) < 64:
         return []
-    gy, gx = np.mgrid[0:rows, 0:cols].astype(np.float32)
-    grid = np.dstack([gx, gy])
     flow_of = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM)
     residuals = []
     for frame in later:
         flow = flow_of.calc(grey, cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY), None)
-        src = np.stack([xs[sel], ys[sel]], -1).astype(np.float32)
-        dst = src + flow[ys[sel], xs[sel]]
-        best = np.full((rows, cols), np.inf, np.float32)
-        for _ in range(2):
-            if len(src) < 32:
-                break
-            hom, inliers = cv2.findHomography(src, dst, cv2.RANSAC, 1.0)
-            if hom is None or inliers.sum() < 0.15 * sel.sum():
-                break
-            moved = cv2.perspectiveTransform(grid.reshape(-1, 1, 2), hom).reshape(rows, cols, 2)
-            best = np.minimum(best, np.linalg.norm(flow - (moved - grid), axis=-1))
-            src, dst = src[inliers.ravel() == 0], dst[inliers.ravel() == 0]
-        if np.isfinite(best).all():
-            residuals.append(best)
+        residual = camera_departure(flow, outside, step=4, planes=2)
+        if residual is not None:
+            residuals.append(residual)
     return residuals
 
 
