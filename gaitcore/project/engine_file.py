@@ -11,7 +11,9 @@ segmentation depends on, the working size, the key area and the names of two arr
 ``engine-table-<hash>.npy`` and ``engine-bits-<hash>.npy`` beside it: the key frames' cuts and
 the masks of the forward and backward passes, bit-packed around the subject (a
 :class:`~gaitcore.silhouettes.roto_state.RotoState`; 1.8 to 3 MB for the 540 frames of
-Muybridge's 960x540 race horse, more with more key frames). A project file without it, or
+Muybridge's 960x540 race horse, more with more key frames), and ``engine-still-<hash>.npy``
+when the camera held still (the background learnt behind the animal, at the working size:
+B, G, R and whether it is known). A project file without it, or
 with one another version wrote, reads as before; reading the engine never raises: a missing,
 damaged, stale or foreign file reads as None and the next correction segments the clip again
 (nothing the artist made is in it). Writing is atomic (arrays, then the JSON, then arrays no
@@ -42,12 +44,12 @@ from gaitcore.project.roto_session import RotoSession, reusable, segmentation_ke
 from gaitcore.project.storage import array_file, sidecar_dir, write_array, write_atomic
 from gaitcore.schema import JsonValue, read_json, read_npy
 from gaitcore.silhouettes.packed_masks import PackedMasks
-from gaitcore.silhouettes.propagate import WorkingSize
+from gaitcore.silhouettes.propagate import StillBackground, WorkingSize
 from gaitcore.silhouettes.roto_state import RotoState
 from gaitcore.silhouettes.segmentation import SegmentationSettings
 
 ENGINE_FORMAT = "gaitstudio-engine"
-ENGINE_VERSION = 4
+ENGINE_VERSION = 5
 """Bump when the engine's arrays, or what the propagation makes of them, change: a file of
 another version is ignored (the clip is segmented again)."""
 ENGINE_FILE = "engine.json"
@@ -58,7 +60,7 @@ MAX_ENGINE_JSON_BYTES = 1 << 16
 MAX_ENGINE_ARRAY_BYTES = 16 << 30
 MAX_ENGINE_FRAMES = 10**8
 MAX_SIDE_PX = 1 << 20
-_ENGINE_ARRAY = re.compile(r"^engine-(table|bits)-[0-9a-f]{16}\.npy$")
+_ENGINE_ARRAY = re.compile(r"^engine-(table|bits|still)-[0-9a-f]{16}\.npy$")
 
 
 def engine_fingerprint(project: Project) -> str:
@@ -144,6 +146,9 @@ def write_engine(path: str | os.PathLike, fingerprint: str, state: RotoState) ->
         side.mkdir(parents=True, exist_ok=True)
         arrays = {"table": write_array(side, "engine-table", np.concatenate(tables)),
                   "bits": write_array(side, "engine-bits", np.concatenate(bits))}
+        if state.still is not None:
+            arrays["still"] = write_array(side, "engine-still", np.dstack(
+                [state.still.image, state.still.known.astype(np.uint8)]))
         doc = {"format": ENGINE_FORMAT, "version": ENGINE_VERSION, "fingerprint": fingerprint,
                "n_frames": state.n_frames,
                "work": {"scale": work.scale, "wh": list(work.wh), "shape": list(work.shape),
@@ -207,7 +212,10 @@ def _read(doc: JsonValue, side: Path) -> RotoState:
                        (shape[0], shape[1]), w.key("subject_side").number(lo=0, hi=MAX_SIDE_PX))
     key_area = doc.key("key_area").number(lo=1, hi=float(wh[0]) * wh[1])
     arrays = {}
-    for name, kind, ndim in (("table", "f", 2), ("bits", "u", 1)):
+    names = (("table", "f", 2), ("bits", "u", 1), ("still", "u", 3))
+    for name, kind, ndim in names:
+        if name == "still" and not doc.key("arrays").has(name):
+            continue
         file = doc.key("arrays").key(name).text()
         if not _ENGINE_ARRAY.match(file):
             raise doc.key("arrays").key(name).fail("the name of an engine array")
@@ -228,7 +236,13 @@ def _read(doc: JsonValue, side: Path) -> RotoState:
         start += used
     if start != len(bits) or sum(len(m.frames) for m in masks.values()) != len(table):
         raise GaitInputError("the engine's masks do not add up")
-    return RotoState(n, work, key_area, masks["keys"], masks["fwd"], masks["bwd"])
+    still = None
+    if "still" in arrays:
+        both = arrays["still"]
+        if both.shape != (wh[1], wh[0], 4) or both.dtype != np.uint8 or both[..., 3].max() > 1:
+            raise GaitInputError("the engine's still background is not of its working size")
+        still = StillBackground(np.ascontiguousarray(both[..., :3]), both[..., 3] > 0)
+    return RotoState(n, work, key_area, masks["keys"], masks["fwd"], masks["bwd"], still)
 
 
 def _remove_arrays(side: Path, *, keep: set[str]) -> None:

@@ -12,8 +12,10 @@ is brought to about ``subject_side_px`` pixels, enough to keep thin legs while s
   the flow carried well is not given away to an ambiguous colour; elsewhere it is blurred and
   weak, and colour decides. Colour is helped by motion: what moves unlike the ground (the
   camera's and the ground's motion, a homography fitted to the flow off the mask) is more
-  likely the subject (:func:`motion_ratios`). Parts of the mask that drift away from the body
-  (background the flow carried along) are dropped.
+  likely the subject (:func:`motion_ratios`). When the camera held still (a tripod shot), so
+  is what looks unlike the ground behind the animal (:class:`StillBackground`,
+  :func:`still_ratios`): a planted foot, or a leg of the ground's own colours. Parts of the
+  mask that drift away from the body (background the flow carried along) are dropped.
 - A result whose area jumps away from the warped mask's (a flood into the ground, or a
   collapse) is refused: the warped mask is kept and the frame marked as not confident. When
   the warped pixels stop looking like the subject, or the mask stops standing out from its
@@ -114,6 +116,10 @@ class PropagationSettings:
         started on frames 0, 15 and 30, from the box, 0.3 took the mean IoU of bear, dog and
         goat from 0.800 to 0.810, and of the five others from 0.639 to 0.640 (0.2 and 0.45,
         in a prototype: 0.805 / 0.639 and 0.816 / 0.637).
+    still_weight : float
+        Weight of the still background's cue (:func:`still_ratios`: how unlike the clip's
+        background a pixel looks) against colour, on a clip whose camera held still
+        (:func:`still_background`); none is sought at 0.
     lost_gap : float
         A propagated frame whose mask stands out from its surroundings, under its key frame's
         colours (:func:`~gaitcore.silhouettes.colour_model.colour_gap`), less than this share
@@ -162,6 +168,7 @@ class PropagationSettings:
     stroke_zone_frac: float = 0.1
     part_gap_frac: float = 0.04
     motion_weight: float = 0.3
+    still_weight: float = 2.0
     lost_gap: float = 0.6
     match_exposure: bool = True
     exposure_pull: float = 0.05
@@ -499,12 +506,136 @@ def motion_ratios(flow: np.ndarray, prob: np.ndarray) -> np.ndarray | None:
         return None
     bins = np.log2(departure + np.float32(0.05))
     bins = np.clip((bins + np.float32(4.5)) * 2, 0, _MOTION_BINS - 1).astype(np.intp)
-    half = prob[::2, ::2]
-    subject = np.bincount(bins[half > 0.9], minlength=_MOTION_BINS) + 1.0
-    background = np.bincount(bins[half < 0.02], minlength=_MOTION_BINS) + 1.0
-    ratios = np.log(subject / subject.sum()) - np.log(background / background.sum())
-    return cv2.resize(np.clip(ratios, -3, 3).astype(np.float32)[bins], prob.shape[::-1],
+    return cv2.resize(_learnt_ratios(bins, prob[::2, ::2], _MOTION_BINS), prob.shape[::-1],
                       interpolation=cv2.INTER_LINEAR)
+
+
+def _learnt_ratios(bins: np.ndarray, prob: np.ndarray, n_bins: int) -> np.ndarray:
+    """Each pixel's log-likelihood ratio, subject against background, of its bin of a cue,
+    learnt from the warped mask's sure sides (``prob`` above 0.9, below 0.02; one more count
+    in every bin), within +-3."""
+    subject = np.bincount(bins[prob > 0.9], minlength=n_bins) + 1.0
+    background = np.bincount(bins[prob < 0.02], minlength=n_bins) + 1.0
+    ratios = np.log(subject / subject.sum()) - np.log(background / background.sum())
+    return np.clip(ratios, -3, 3).astype(np.float32)[bins]
+
+
+STILL_FRAMES = 15
+"""Frames sampled evenly across a clip to tell whether its camera held still, and to learn the
+background behind the animal."""
+
+STILL_LEAST = 8
+"""Fewest frames a clip's still background is looked for in."""
+
+_STILL_LEVELS = 12
+_STILL_SHARE = 0.8
+"""A camera held still when, on most sampled frames, at least this share of the pixels are
+within ``_STILL_LEVELS`` (each of B, G and R) of the samples' median. Panning footage shares
+far less (DAVIS's bear, dog, goat and five other animal clips at most 0.51), and so does
+Muybridge's race horse, a loop that keeps the horse in place (0.48 to 0.79)."""
+
+_STILL_BINS = 17
+"""Bins of :func:`still_ratios`: half octaves of the difference from the still background,
+from 0 to 255 levels."""
+
+
+def camera_held_still(frames: Sequence[np.ndarray]) -> bool:
+    """Whether frames sampled across a clip (:data:`STILL_FRAMES`, at least
+    :data:`STILL_LEAST`) show a camera that held still (see :data:`_STILL_SHARE`)."""
+    if len(frames) < STILL_LEAST:
+        return False
+    stack = np.stack(frames)
+    shares = _agreeing(stack, np.median(stack, axis=0).astype(np.uint8))
+    return bool(np.median(shares) >= _STILL_SHARE)
+
+
+def may_hold_still(first: np.ndarray, later: np.ndarray, off: np.ndarray) -> bool:
+    """A first look, from two frames a few apart that are decoded anyway: whether they agree
+    off the subject (``off``, bool) as a still camera's frames do (:data:`_STILL_SHARE`).
+    Only then are frames sampled across the clip (:func:`camera_held_still`): seeking them
+    costs a second on a 540-frame 960x540 video."""
+    # Two frames' noise, where the median has little: the levels grow by the square root of 2.
+    return bool(_agreeing(later[None], first, off, levels=_STILL_LEVELS * np.sqrt(2))[0]
+                >= _STILL_SHARE)
+
+
+def _agreeing(frames: np.ndarray, reference: np.ndarray, where: np.ndarray | None = None, *,
+              levels: float = _STILL_LEVELS) -> np.ndarray:
+    """For each of ``frames`` (n, rows, cols, 3), the share of its pixels (of ``where``, when
+    given) within ``levels`` of ``reference`` on each of B, G and R."""
+    near = (np.abs(frames.astype(np.int16) - reference) <= levels).all(axis=3)
+    if where is None:
+        return near.mean(axis=(1, 2))
+    return near[:, where].mean(axis=1) if where.any() else np.zeros(len(frames))
+
+
+@dataclass(frozen=True)
+class StillBackground:
+    """What lies behind the animal in a clip whose camera held still.
+
+    Attributes
+    ----------
+    image : ndarray of shape (rows, cols, 3), uint8
+        At the working size: per pixel, the median of the sampled frames on which the
+        animal's mask (grown by 3 pixels) leaves it free.
+    known : ndarray of shape (rows, cols), bool
+        Where at least one sampled frame left it free.
+    """
+
+    image: np.ndarray
+    known: np.ndarray
+
+    @classmethod
+    def learn(cls, frames: Sequence[np.ndarray], masks: Sequence[np.ndarray]
+              ) -> StillBackground:
+        """From frames sampled across the clip and the animal's masks on them (0/1, working
+        size). A plain median would hold an animal that lingers on a spot, and call the ground
+        it uncovers the subject."""
+        stack = np.stack(frames).astype(np.float32)
+        taken = np.stack([cv2.dilate(m.astype(np.uint8), disk(3)) > 0 for m in masks])
+        stack[taken] = np.nan
+        known = ~taken.all(axis=0)
+        image = np.zeros(stack.shape[1:], np.uint8)
+        image[known] = np.nanmedian(stack[:, known], axis=0).round().astype(np.uint8)
+        return cls(image, known)
+
+    def window(self, x0: int, y0: int, x1: int, y1: int) -> StillBackground:
+        return StillBackground(self.image[y0:y1, x0:x1], self.known[y0:y1, x0:x1])
+
+
+def still_ratios(image: np.ndarray, background: StillBackground, prob: np.ndarray
+                 ) -> np.ndarray | None:
+    """How much more likely each pixel is the subject, by how unlike the still background
+    it looks.
+
+    Parameters
+    ----------
+    image : ndarray of shape (h, w, 3), uint8
+        This frame's window.
+    background : StillBackground
+        The same window of the clip's (:meth:`StillBackground.window`).
+    prob : ndarray of shape (h, w), float32
+        The warped mask in [0, 1].
+
+    Returns
+    -------
+    ndarray of shape (h, w), float32, or None
+        Log-likelihood ratios within +-3 (0 where the background is not known), learnt on
+        this frame from the warped mask's sure sides as :func:`motion_ratios`' are; None when
+        the mask has too few sure pixels.
+
+    Notes
+    -----
+    The difference is the largest of the three channels', binned in half octaves
+    (:data:`_STILL_BINS`). Unlike motion, it tells a planted foot from the ground it stands
+    on, and a leg of the ground's own colours from the ground the background shows there.
+    """
+    if np.count_nonzero(prob > 0.9) < 16:
+        return None
+    diff = cv2.absdiff(image, background.image).max(axis=2)
+    bins = np.clip(2 * np.log2(diff.astype(np.float32) + 1), 0, _STILL_BINS - 1).astype(np.intp)
+    sure = np.where(background.known, prob, np.float32(0.5))
+    return np.where(background.known, _learnt_ratios(bins, sure, _STILL_BINS), np.float32(0))
 
 
 def _measurable(image: np.ndarray) -> np.ndarray:
@@ -649,7 +780,8 @@ def exposed(small: np.ndarray, gains: float | Sequence[float] | np.ndarray) -> n
 
 
 def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: ColourTable,
-             settings: PropagationSettings, motion: np.ndarray | None = None) -> Cut:
+             settings: PropagationSettings, motion: np.ndarray | None = None,
+             still: np.ndarray | None = None) -> Cut:
     """Decide one window of a propagated frame from its colours and the warped mask.
 
     Parameters
@@ -666,6 +798,8 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
     settings : PropagationSettings
     motion : ndarray of shape (h, w), float32, optional
         The motion cue (:attr:`Warp.motion`), weighed by ``motion_weight``.
+    still : ndarray of shape (h, w), float32, optional
+        The still background's cue (:func:`still_ratios`), weighed by ``still_weight``.
 
     Returns
     -------
@@ -679,7 +813,8 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
     Notes
     -----
     Per pixel, the evidence for "subject" is the colour log-likelihood ratio, plus
-    ``motion_weight`` times the motion's (when given), plus the warped mask's log-odds:
+    ``motion_weight`` times the motion's and ``still_weight`` times the still background's
+    (when given), plus the warped mask's log-odds:
     ``trusted_prior_weight`` times those of the mask as warped (kept within those of 0.1 and
     0.9, so a strong colour can still turn a pixel the flow carried wrong), where the flow is
     trusted, and ``prior_weight`` times those of the mask blurred by
@@ -698,7 +833,11 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
                       0.02)
     sharp = _log_odds(prior, 0.1)
     ratios = colours(small)
-    cues = ratios if motion is None else ratios + np.float32(settings.motion_weight) * motion
+    cues = ratios
+    if motion is not None:
+        cues = cues + np.float32(settings.motion_weight) * motion
+    if still is not None:
+        cues = cues + np.float32(settings.still_weight) * still
     evidence = (cues + trust * (settings.trusted_prior_weight * sharp)
                 + (1 - trust) * (settings.prior_weight * loose))
     evidence = cv2.ximgproc.guidedFilter(np.ascontiguousarray(small), evidence,

@@ -36,22 +36,32 @@ from gaitcore.silhouettes.keyframe import (
 )
 from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import (
+    STILL_FRAMES,
+    STILL_LEAST,
     TOUCHING,
     Cut,
     ExposureTrack,
     PropagationSettings,
+    StillBackground,
     WorkingSize,
+    camera_held_still,
     disk,
     exposed,
     find_again,
     fuse_cut,
     key_colours,
     make_flow,
+    may_hold_still,
     overlap,
+    still_ratios,
     warp_mask,
 )
 from gaitcore.silhouettes.sketch import rasterize_strokes
 from gaitcore.silhouettes.tracking import keep_overlapping
+
+_STILL_LOOK = 6
+"""The frame compared with frame 0 for a first look at whether the camera held still (the
+first cut's motion reads it too: the last of ``motion_offsets``)."""
 
 _DRIFT_FLOOR = 0.02
 """Least drift a pass is taken to have at the other key: a pass that lands on it exactly still
@@ -99,6 +109,14 @@ class RotoSegmentation:
         Strokes on any frames (see :meth:`correct`).
     settings : PropagationSettings, optional
 
+    Attributes
+    ----------
+    still : StillBackground or None
+        After :meth:`run`, when the camera held still (:func:`camera_held_still` of
+        :data:`STILL_FRAMES` frames sampled across the clip): what lies behind the animal,
+        learnt from the frames the first cut's own pass leaves free; the clip is then
+        carried again with it as a cue (:func:`still_ratios`). Corrections keep it.
+
     Raises
     ------
     GaitInputError
@@ -127,6 +145,8 @@ class RotoSegmentation:
         self.bwd = PackedMasks(self.work.wh[::-1])
         self.keys: dict[int, Cut] = {}
         self.key_area = 1.0
+        self.still: StillBackground | None = None
+        self._sampled: dict[int, np.ndarray | None] = {}  # frames kept as a pass decodes them
 
     # -- public -----------------------------------------------------------------------------
     @property
@@ -142,15 +162,39 @@ class RotoSegmentation:
             When ``progress`` returned False.
         """
         self.keys.clear()
-        self.fwd, self.bwd = PackedMasks(self.fwd.shape), PackedMasks(self.bwd.shape)
         key_frames = sorted({0} | set(self.corrected_frames))
-        done = [0]
-        total = self.n + sum(b - a for a, b in zip(key_frames, key_frames[1:]))
         self.keys[0] = self._first_cut()
         self._check_first_cut(self.keys[0].mask)
         self.key_area = max(1.0, float(self.keys[0].mask.sum()))
-        done[0] = 1
+        may_hold_still = self._may_hold_still()
+        done = [1]
+        total = self.n + sum(b - a for a, b in zip(key_frames, key_frames[1:]))
+        total += self.n - 1 if may_hold_still else 0  # a pass to learn what lies behind
         report(progress, 1, total, "segmentation cancelled")
+        self.still = None
+        if may_hold_still:
+            # What lies behind the animal is learnt from the first cut's own pass (strokes on
+            # later frames aside, so erasing one gives what a run without it gives), from
+            # frames sampled across the clip as the pass decodes them.
+            picks = self._still_picks()
+            self._sampled = dict.fromkeys(picks)
+            self.fwd, self.bwd = PackedMasks(self.fwd.shape), PackedMasks(self.bwd.shape)
+            try:
+                self._forward(0, self.n, progress, done, total)
+                sampled = [self._sampled[t] for t in picks]
+            finally:
+                self._sampled = {}
+            if camera_held_still(sampled):
+                self.still = StillBackground.learn(sampled, [self._final(t).mask for t in picks])
+            elif len(key_frames) == 1:
+                report(progress, total, total, "segmentation cancelled")
+                return  # that pass was the whole run
+        self._passes(key_frames, progress, done, total)
+
+    def _passes(self, key_frames: list[int], progress, done: list[int], total: int) -> None:
+        """Carry the masks across the whole clip from its key frames, both ways (frame 0
+        already cut; corrected frames cut again from the forward pass's mask)."""
+        self.fwd, self.bwd = PackedMasks(self.fwd.shape), PackedMasks(self.bwd.shape)
         for a, b in zip(key_frames, key_frames[1:] + [self.n]):
             self._forward(a, min(b + 1, self.n), progress, done, total)
             if b < self.n:
@@ -440,6 +484,8 @@ class RotoSegmentation:
         flow_of = make_flow(self.s)
         prev = grey_prev = models = exposure = None
         for t, small in frames:
+            if t in self._sampled:
+                self._sampled[t] = small
             grey = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
             if t == key:
                 models = key_colours(small, mask, self.s)
@@ -467,11 +513,28 @@ class RotoSegmentation:
         warp = warp_mask(mask, greys[0], greys[1], flow_of, self.s, colours=colours)
         gains = exposure.step(warp)
         x0, y0, x1, y1 = warp.window
+        still = None if self.still is None else still_ratios(
+            small[y0:y1, x0:x1], self.still.window(x0, y0, x1, y1), warp.prob)
         cut = fuse_cut(exposed(small[y0:y1, x0:x1], gains), warp.prob, warp.trust, models,
-                       self.s, warp.motion)
+                       self.s, warp.motion, still)
         out = np.zeros_like(mask)
         out[y0:y1, x0:x1] = cut.mask
         return Cut(out, cut.confidence)
+
+    def _may_hold_still(self) -> bool:
+        """Frame 0 and frame :data:`_STILL_LOOK` (decoded for the first cut's motion) agree
+        off the first cut as a still camera's do (:func:`may_hold_still`)."""
+        if self.s.still_weight <= 0 or self.n < STILL_LEAST:
+            return False
+        first, then = (self.work.shrink(check_frame(self.source[t])) for t in (0, _STILL_LOOK))
+        mask = self.keys[0].mask
+        _, _, w, h = cv2.boundingRect(mask)
+        off = cv2.dilate(mask, disk(max(1, round(0.1 * max(w, h))))) == 0
+        return may_hold_still(first, then, off)
+
+    def _still_picks(self) -> list[int]:
+        return [int(t) for t in
+                np.unique(np.linspace(0, self.n - 1, min(self.n, STILL_FRAMES)).round())]
 
     # -- blending ---------------------------------------------------------------------------
     def _neighbours(self, t: int) -> tuple[int, int]:

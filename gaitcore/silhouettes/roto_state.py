@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from gaitcore.silhouettes.packed_masks import PackedMasks
-from gaitcore.silhouettes.propagate import WorkingSize
+from gaitcore.silhouettes.propagate import StillBackground, WorkingSize
 from gaitcore.silhouettes.roto import RotoSegmentation
 
 
@@ -30,6 +30,8 @@ class RotoState:
     keys, fwd, bwd : PackedMasks
         The key frames' cuts, and the masks of the forward and backward passes, at the
         working size.
+    still : StillBackground or None
+        :attr:`RotoSegmentation.still`.
     """
 
     n_frames: int
@@ -38,6 +40,7 @@ class RotoState:
     keys: PackedMasks
     fwd: PackedMasks
     bwd: PackedMasks
+    still: StillBackground | None = None
 
 
 def roto_state(seg: RotoSegmentation) -> RotoState:
@@ -46,7 +49,7 @@ def roto_state(seg: RotoSegmentation) -> RotoState:
     keys = PackedMasks(seg.fwd.shape)
     for t, cut in seg.keys.items():
         keys.put(t, cut)
-    return RotoState(seg.n, seg.work, seg.key_area, keys, seg.fwd, seg.bwd)
+    return RotoState(seg.n, seg.work, seg.key_area, keys, seg.fwd, seg.bwd, seg.still)
 
 
 def restore_state(seg: RotoSegmentation, state: RotoState) -> bool:
@@ -59,4 +62,5 @@ def restore_state(seg: RotoSegmentation, state: RotoState) -> bool:
         return False
     seg.keys = {t: cut for t in keys if (cut := state.keys.get(t)) is not None}
     seg.fwd, seg.bwd, seg.key_area = state.fwd, state.bwd, state.key_area
+    seg.still = state.still
     return True

@@ -26,7 +26,7 @@ from gaitcore.project.roto_session import RotoSession, corrected
 from gaitcore.project.storage import load_project, save_project, sidecar_dir, write_array
 from gaitcore.silhouettes.annotations import Scribble
 from gaitcore.silhouettes.packed_masks import PackedMasks
-from gaitcore.silhouettes.propagate import Cut, WorkingSize
+from gaitcore.silhouettes.propagate import Cut, StillBackground, WorkingSize
 from gaitcore.silhouettes.roto_state import RotoState
 from tests.fuzzing import DEFAULT_CASES, check_reader, mutate_json
 from tests.gaitcore.conftest import SCENE_FRAMES
@@ -90,6 +90,10 @@ def test_the_engine_is_small_and_holds_the_masks_exactly(scene_images, tmp_path)
         for t in want.frames:
             a, b = got.get(t), want.get(t)
             assert np.array_equal(a.mask, b.mask) and a.confidence == b.confidence
+    # The scene's camera holds still: what lies behind the animal is kept as learnt.
+    assert original.still is not None and state.still is not None
+    assert np.array_equal(state.still.image, original.still.image)
+    assert np.array_equal(state.still.known, original.still.known)
 
 
 def _truncate(side):
@@ -203,7 +207,9 @@ def test_fuzzed_engine_files_read_as_none_or_as_masks_that_fit(tmp_path):
         for t in frames:
             masks.put(t, Cut((rng.random((12, 16)) > 0.5).astype(np.uint8), 0.5))
         stores.append(masks)
-    state = RotoState(6, WorkingSize(0.5, (16, 12), (24, 32), 20.0), 40.0, *stores)
+    still = StillBackground(rng.integers(0, 256, (12, 16, 3), dtype=np.uint8),
+                            rng.random((12, 16)) > 0.2)
+    state = RotoState(6, WorkingSize(0.5, (16, 12), (24, 32), 20.0), 40.0, *stores, still)
     valid = tmp_path / "valid" / "p.gaitproj"
     write_engine(valid, "f" * 64, state)
     doc = json.loads((sidecar_dir(valid) / ENGINE_FILE).read_text())
@@ -224,6 +230,9 @@ def test_fuzzed_engine_files_read_as_none_or_as_masks_that_fit(tmp_path):
             for t in masks.frames:
                 assert 0 <= t < read.n_frames
                 assert masks.get(t).mask.shape == read.work.wh[::-1]
+        if read.still is not None:
+            assert read.still.image.shape == (*read.work.wh[::-1], 3)
+            assert read.still.known.shape == read.work.wh[::-1]
 
     check_reader(write_case, lambda p: read_engine(p, "f" * 64), tmp_path / "cases",
                  n_cases=DEFAULT_CASES, seed=3, check=fits)

@@ -204,9 +204,18 @@ def test_the_scripted_user_strokes_the_largest_wrong_region():
 
 
 def test_the_scripted_user_improves_a_wrong_start():
+    from gaitcore.silhouettes.propagate import PropagationSettings
+
     frames, truth = scene(10)
-    # A box around the body only: the legs are outside it on frame 0.
-    seg = RotoSegmentation(frames, box=Rect(12, 38, 46, 24))
+    # A box around the body only: the legs are outside it on frame 0. The camera holds
+    # still, and what lies behind the animal finds them on the frames after it...
+    box = Rect(12, 38, 46, 24)
+    seg = RotoSegmentation(frames, box=box)
+    seg.run()
+    assert seg.still is not None
+    assert np.mean([iou(seg.mask(t), truth[t]) for t in range(1, 10)]) > 0.95
+    # ... without it, the scripted user's strokes do.
+    seg = RotoSegmentation(frames, box=box, settings=PropagationSettings(still_weight=0.0))
     seg.run()
     run = run_scripted_user(seg, truth, 3)
     assert run.ious.shape[1] == 10 and run.seconds.size >= 1
@@ -864,3 +873,48 @@ def test_a_clip_whose_white_balance_drifts_keeps_its_subject(shared_data):
     seg.run()
     scores = [iou(seg.mask(t), refs[t]) for t in range(n)]
     assert np.mean(scores) > 0.85, np.mean(scores)
+
+
+def _ground_coloured_walker(pan: float) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """24 frames of an animal (a body on four legs, the legs swinging) of nearly the ground's
+    colours walking 4 pixels a frame across ground seen by a camera that holds still
+    (``pan`` 0) or pans ``pan`` pixels a frame; and its true masks."""
+    rng = np.random.default_rng(11)
+    ground = cv2.GaussianBlur(rng.integers(40, 200, (140, 400, 3)).astype(np.uint8), (0, 0), 1.5)
+    fur = cv2.GaussianBlur(rng.integers(30, 190, (140, 400, 3)).astype(np.uint8), (0, 0), 1.5)
+    frames, masks = [], []
+    for t in range(24):
+        mask = np.zeros((120, 220), np.uint8)
+        x = 50 + 4 * t
+        cv2.ellipse(mask, (x, 55), (34, 16), 0, 0, 360, 1, -1)
+        for foot, phase in ((-24, 0.0), (-14, np.pi), (16, np.pi), (26, 0.0)):
+            swing = round(6 * np.sin(0.5 * t + phase))
+            cv2.line(mask, (x + foot, 60), (x + foot + swing, 104), 1, 5)
+        shift = round(pan * t)
+        view = ground[10:130, shift : shift + 220].copy()
+        view[mask > 0] = fur[10:130, 100 : 320][mask > 0]
+        frames.append(view)
+        masks.append(mask > 0)
+    return frames, masks
+
+
+def test_a_still_camera_tells_an_animal_of_the_grounds_colours_from_the_ground():
+    """With the camera still, what lies behind the animal is learnt from the frames it has
+    left (and the animal's own first masks): the animal, legs and all, is told from ground of
+    its own colours better than by motion and the warped mask alone. A panning camera is
+    not taken for a still one."""
+    from gaitcore.silhouettes.propagate import PropagationSettings
+
+    frames, masks = _ground_coloured_walker(0.0)
+    box = padded_box(masks[0], 0.1)
+    scores = {}
+    for weight in (0.0, PropagationSettings().still_weight):
+        seg = RotoSegmentation(frames, box=box, settings=PropagationSettings(still_weight=weight))
+        seg.run()
+        assert (seg.still is None) == (weight == 0.0)
+        scores[weight] = np.mean([iou(seg.mask(t), masks[t]) for t in range(seg.n)])
+    assert scores[PropagationSettings().still_weight] > scores[0.0] + 0.2, scores
+    panned, _ = _ground_coloured_walker(3.0)
+    seg = RotoSegmentation(panned, box=box)
+    seg.run()
+    assert seg.still is None
