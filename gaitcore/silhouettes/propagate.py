@@ -119,7 +119,9 @@ class PropagationSettings:
     still_weight : float
         Weight of the still background's cue (:func:`still_ratios`: how unlike the clip's
         background a pixel looks) against colour, on a clip whose camera held still
-        (:func:`still_background`); none is sought at 0.
+        (:func:`camera_held_still`, :class:`StillBackground`); none is sought at 0. DAVIS's
+        bear, dog and goat laid on still plates read 0.951 / 0.831 / 0.588 at 1 and 0.953 /
+        0.861 / 0.598 at 2, against 0.929 / 0.689 / 0.490 without.
     lost_gap : float
         A propagated frame whose mask stands out from its surroundings, under its key frame's
         colours (:func:`~gaitcore.silhouettes.colour_model.colour_gap`), less than this share
@@ -552,8 +554,8 @@ def camera_held_still(frames: Sequence[np.ndarray]) -> bool:
 def may_hold_still(first: np.ndarray, later: np.ndarray, off: np.ndarray) -> bool:
     """A first look, from two frames a few apart that are decoded anyway: whether they agree
     off the subject (``off``, bool) as a still camera's frames do (:data:`_STILL_SHARE`).
-    Only then are frames sampled across the clip (:func:`camera_held_still`): seeking them
-    costs a second on a 540-frame 960x540 video."""
+    Only then are frames sampled across the clip (:func:`camera_held_still`), as a pass
+    decodes them: seeking them first cost 1.2 s of 13 on Muybridge's 540-frame race horse."""
     # Two frames' noise, where the median has little: the levels grow by the square root of 2.
     return bool(_agreeing(later[None], first, off, levels=_STILL_LEVELS * np.sqrt(2))[0]
                 >= _STILL_SHARE)
@@ -600,6 +602,7 @@ class StillBackground:
         return cls(image, known)
 
     def window(self, x0: int, y0: int, x1: int, y1: int) -> StillBackground:
+        """The part within ``x0 <= x < x1``, ``y0 <= y < y1`` (a propagated frame's window)."""
         return StillBackground(self.image[y0:y1, x0:x1], self.known[y0:y1, x0:x1])
 
 
