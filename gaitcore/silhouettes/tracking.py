@@ -194,8 +194,8 @@ class RoiAccumulator:
         lost = np.isnan(centers[:, 0])
         if n == 0 or lost.all():
             raise GaitInputError(
-                "no subject found in any frame: the masks are empty; check the segmentation "
-                "rectangles or sketch the animal"
+                "no subject found in any frame: the masks are empty; draw the box (or the "
+                "rectangles) closer around the animal, or paint subject strokes on it"
             )
         boxes = np.array([it[2] for it in self._items if it is not None])
         w = int(np.ceil(boxes[:, 2].max() * (1 + 2 * margin))) + 2
