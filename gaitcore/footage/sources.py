@@ -19,7 +19,7 @@ import os
 import queue
 import threading
 from collections import OrderedDict
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from pathlib import Path
 
 import cv2
@@ -386,7 +386,7 @@ def video_fps(path: str | os.PathLike) -> float | None:
 
 
 # -- helpers ---------------------------------------------------------------------------
-def prefetched(items: Iterator, depth: int) -> Iterator:
+def prefetched(items: Iterator, depth: int) -> Generator:
     """Run ``items`` on a daemon thread, ``depth`` items ahead; errors reach the consumer."""
     q: queue.Queue = queue.Queue(maxsize=depth)
     stop = threading.Event()

@@ -212,10 +212,10 @@ def _read(doc: JsonValue, side: Path) -> RotoState:
                        (shape[0], shape[1]), w.key("subject_side").number(lo=0, hi=MAX_SIDE_PX))
     key_area = doc.key("key_area").number(lo=1, hi=float(wh[0]) * wh[1])
     arrays = {}
-    names = (("table", "f", 2), ("bits", "u", 1), ("still", "u", 3))
+    names = [("table", "f", 2), ("bits", "u", 1)]
+    if doc.key("arrays").has("still"):
+        names.append(("still", "u", 3))
     for name, kind, ndim in names:
-        if name == "still" and not doc.key("arrays").has(name):
-            continue
         file = doc.key("arrays").key(name).text()
         if not _ENGINE_ARRAY.match(file):
             raise doc.key("arrays").key(name).fail("the name of an engine array")

@@ -17,7 +17,7 @@ of megabytes; frames are decoded again when a backward pass needs them.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Collection, Iterator, Sequence
+from collections.abc import Callable, Collection, Generator, Iterator, Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -146,7 +146,6 @@ class RotoSegmentation:
         self.keys: dict[int, Cut] = {}
         self.key_area = 1.0
         self.still: StillBackground | None = None
-        self._sampled: dict[int, np.ndarray | None] = {}  # frames kept as a pass decodes them
 
     # -- public -----------------------------------------------------------------------------
     @property
@@ -177,13 +176,11 @@ class RotoSegmentation:
             # later frames aside, so erasing one gives what a run without it gives), from
             # frames sampled across the clip as the pass decodes them.
             picks = self._still_picks()
-            self._sampled = dict.fromkeys(picks)
+            kept: dict[int, np.ndarray] = {}
             self.fwd, self.bwd = PackedMasks(self.fwd.shape), PackedMasks(self.bwd.shape)
-            try:
-                self._forward(0, self.n, progress, done, total)
-                sampled = [self._sampled[t] for t in picks]
-            finally:
-                self._sampled = {}
+            self._carry(self.keys[0].mask, 0, _keeping(self._frames(0, self.n), set(picks), kept),
+                        self.fwd, progress, done, total)
+            sampled = [kept[t] for t in picks]
             if camera_held_still(sampled):
                 self.still = StillBackground.learn(sampled, [self._final(t).mask for t in picks])
             elif len(key_frames) == 1:
@@ -442,7 +439,7 @@ class RotoSegmentation:
             self._backward(back, prev, progress, done, total)
         return (k if prev is None else prev + 1), nxt
 
-    def _frames(self, start: int, stop: int) -> Iterator[tuple[int, np.ndarray]]:
+    def _frames(self, start: int, stop: int) -> Generator[tuple[int, np.ndarray], None, None]:
         """Working-size frames ``start <= t < stop`` in order, decoded and shrunk on a
         thread of their own a few frames ahead (OpenCV lets go of the GIL in both)."""
         if hasattr(self.source, "iter_frames"):
@@ -484,8 +481,6 @@ class RotoSegmentation:
         flow_of = make_flow(self.s)
         prev = grey_prev = models = exposure = None
         for t, small in frames:
-            if t in self._sampled:
-                self._sampled[t] = small
             grey = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
             if t == key:
                 models = key_colours(small, mask, self.s)
@@ -579,6 +574,19 @@ class RotoSegmentation:
         soft = (w * cv2.GaussianBlur(f.mask.astype(np.float32), (0, 0), 1.5)
                 + (1 - w) * cv2.GaussianBlur(g.mask.astype(np.float32), (0, 0), 1.5))
         return Cut((soft > 0.5).astype(np.uint8), w * f.confidence + (1 - w) * g.confidence)
+
+
+def _keeping(stream: Generator[tuple[int, np.ndarray], None, None], picks: Collection[int],
+             kept: dict[int, np.ndarray]) -> Iterator[tuple[int, np.ndarray]]:
+    """``stream`` as it is, its frames numbered in ``picks`` kept into ``kept`` on the way
+    (``stream`` closed when this is, its decoding thread stopped)."""
+    try:
+        for t, small in stream:
+            if t in picks:
+                kept[t] = small
+            yield t, small
+    finally:
+        stream.close()
 
 
 def _union(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
