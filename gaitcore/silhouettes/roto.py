@@ -17,6 +17,7 @@ of megabytes; frames are decoded again when a backward pass needs them.
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable, Collection, Generator, Iterator, Sequence
 from dataclasses import dataclass
 
@@ -41,6 +42,7 @@ from gaitcore.silhouettes.propagate import (
     TOUCHING,
     Cut,
     ExposureTrack,
+    NearbyGround,
     PropagationSettings,
     StillBackground,
     WorkingSize,
@@ -479,27 +481,47 @@ class RotoSegmentation:
     def _carry(self, mask: np.ndarray, key: int, frames, store: PackedMasks,
                progress, done, total) -> None:
         flow_of = make_flow(self.s)
+        nearby = (NearbyGround(self.s) if self.still is None and self.s.nearby_weight > 0
+                  else None)
         prev = grey_prev = models = exposure = None
-        for t, small in frames:
-            grey = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
+        for i, (t, small, grey) in enumerate(self._ahead(frames, nearby, lambda: mask)):
             if t == key:
                 models = key_colours(small, mask, self.s)
                 exposure = ExposureTrack(grey, mask, self.s, small)
             else:
                 cut = self._step(mask, (prev, small), (grey_prev, grey), flow_of, models,
-                                 exposure)
+                                 exposure, (nearby, i))
                 store.put(t, cut)
                 mask = cut.mask
                 done[0] += 1
                 report(progress, done[0], max(total, done[0]), "segmentation cancelled")
+            if nearby is not None:
+                nearby.settle(i, mask)
             prev, grey_prev = small, grey
 
+    def _ahead(self, frames, nearby: NearbyGround | None, latest: Callable[[], np.ndarray]
+               ) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+        """A pass's frames with their grey, each given to ``nearby`` (when there is one)
+        ``nearby_reach`` frames before it is decided, with the latest mask of the pass."""
+        reach = 0 if nearby is None else nearby.reach
+        queue: deque[tuple[int, np.ndarray, np.ndarray]] = deque()
+        for i, (t, small) in enumerate(frames):
+            grey = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
+            if nearby is not None:
+                nearby.add(i, small, grey, latest())
+            queue.append((t, small, grey))
+            if len(queue) > reach:
+                yield queue.popleft()
+        yield from queue
+
     def _step(self, mask, colours, greys, flow_of, models,
-              exposure: ExposureTrack | None) -> Cut:
+              exposure: ExposureTrack | None,
+              nearby: tuple[NearbyGround | None, int] = (None, 0)) -> Cut:
         """One propagated frame (``colours`` and ``greys``: the previous frame and this one),
         brought back to its key frame's exposure and colour balance (``exposure`` follows
         them) before the key's colours judge it: a camera's auto-exposure and white balance,
-        or Muybridge's plates, each printed lighter or darker."""
+        or Muybridge's plates, each printed lighter or darker. ``nearby``: the pass's ground
+        around its frames and this frame's place in the pass."""
         small = colours[1]
         if models is None or exposure is None:
             return Cut(mask, 0.0)
@@ -508,10 +530,18 @@ class RotoSegmentation:
         warp = warp_mask(mask, greys[0], greys[1], flow_of, self.s, colours=colours)
         gains = exposure.step(warp)
         x0, y0, x1, y1 = warp.window
-        still = None if self.still is None else still_ratios(
-            small[y0:y1, x0:x1], self.still.window(x0, y0, x1, y1), warp.prob)
+        ground, i = nearby
+        if self.still is not None:
+            still = still_ratios(small[y0:y1, x0:x1], self.still.window(x0, y0, x1, y1),
+                                 warp.prob)
+            weight = self.s.still_weight
+        elif ground is not None:
+            still = ground.ratios(i, small[y0:y1, x0:x1], warp.prob, warp.window)
+            weight = self.s.nearby_weight
+        else:
+            still, weight = None, 0.0
         cut = fuse_cut(exposed(small[y0:y1, x0:x1], gains), warp.prob, warp.trust, models,
-                       self.s, warp.motion, still)
+                       self.s, warp.motion, still, weight)
         out = np.zeros_like(mask)
         out[y0:y1, x0:x1] = cut.mask
         return Cut(out, cut.confidence)

@@ -214,8 +214,10 @@ def test_the_scripted_user_improves_a_wrong_start():
     seg.run()
     assert seg.still is not None
     assert np.mean([iou(seg.mask(t), truth[t]) for t in range(1, 10)]) > 0.95
-    # ... without it, the scripted user's strokes do.
-    seg = RotoSegmentation(frames, box=box, settings=PropagationSettings(still_weight=0.0))
+    # ... without it (nor the frames around each, which would find them too), the scripted
+    # user's strokes do.
+    seg = RotoSegmentation(frames, box=box,
+                           settings=PropagationSettings(still_weight=0.0, nearby_weight=0.0))
     seg.run()
     run = run_scripted_user(seg, truth, 3)
     assert run.ious.shape[1] == 10 and run.seconds.size >= 1
@@ -918,3 +920,43 @@ def test_a_still_camera_tells_an_animal_of_the_grounds_colours_from_the_ground()
     seg = RotoSegmentation(panned, box=box)
     seg.run()
     assert seg.still is None
+
+
+def test_a_panning_camera_tells_an_animal_of_the_grounds_colours_from_the_ground():
+    """With the camera panning, the frames either side of each, brought to it by the camera's
+    motion, show the ground behind the animal: the one just uncovered behind it, and the one
+    it steps onto."""
+    from gaitcore.silhouettes.propagate import PropagationSettings
+
+    frames, masks = _ground_coloured_walker(3.0)
+    box = padded_box(masks[0], 0.1)
+    scores = {}
+    for weight in (0.0, PropagationSettings().nearby_weight):
+        seg = RotoSegmentation(frames, box=box,
+                               settings=PropagationSettings(nearby_weight=weight))
+        seg.run()
+        scores[weight] = np.mean([iou(seg.mask(t), masks[t]) for t in range(seg.n)])
+    assert scores[PropagationSettings().nearby_weight] > scores[0.0] + 0.15, scores
+
+
+def test_the_cameras_motion_is_found_off_the_animal():
+    """A frame and the same view shifted and turned a little, with an animal moving its own
+    way: the homography found maps the ground, not the animal."""
+    from gaitcore.silhouettes.propagate import camera_motion
+
+    rng = np.random.default_rng(5)
+    ground = cv2.GaussianBlur(rng.integers(0, 255, (200, 300)).astype(np.uint8), (0, 0), 2.0)
+    turn = cv2.getRotationMatrix2D((150.0, 100.0), 2.0, 1.0)
+    turn[:, 2] += (6.0, -3.0)
+    later = cv2.warpAffine(ground, turn, (300, 200), borderMode=cv2.BORDER_REFLECT)
+    animal = np.zeros((200, 300), bool)
+    animal[70:130, 120:200] = True
+    first = ground.copy()
+    first[animal] = rng.integers(0, 255, int(animal.sum()))
+    later[np.roll(animal, -20, axis=1)] = first[animal]
+    found = camera_motion(first, later, ~animal)
+    assert found is not None
+    corners = np.float32([[[30, 30]], [[270, 30]], [[270, 170]], [[30, 170]]])
+    expected = cv2.transform(corners, turn)
+    assert np.abs(cv2.perspectiveTransform(corners, found) - expected).max() < 0.5
+    assert camera_motion(np.zeros((200, 300), np.uint8), later, ~animal) is None
