@@ -235,7 +235,7 @@ def still_camera() -> Section:
         "the reference's on frame 0 padded 4%, no strokes",
         "the still background: per pixel, the median of 15 frames sampled across the clip "
         "where the engine's own first masks leave the ground free; the clip is then carried "
-        "again with how unlike it each pixel looks as a cue (propagate.still_ratios)",
+        "again with how unlike it each pixel looks as a cue (propagate.StillBackground.ratios)",
         "nearby ground's cue only: no still background is sought (still_weight 0), so the "
         "frames up to 8 either side of each give the ground behind the animal "
         "(propagate.NearbyGround), as on a panning camera; on the tests' synthetic still "

@@ -14,7 +14,7 @@ is brought to about ``subject_side_px`` pixels, enough to keep thin legs while s
   camera's and the ground's motion, a homography fitted to the flow off the mask) is more
   likely the subject (:func:`motion_ratios`). When the camera held still (a tripod shot), so
   is what looks unlike the ground behind the animal (:class:`StillBackground`,
-  :func:`still_ratios`): a planted foot, or a leg of the ground's own colours. When it did not
+  :meth:`StillBackground.ratios`): a planted foot, or a leg of the ground's own colours. When it did not
   (a camera panning after the animal), the ground behind the animal is what the frames either
   side show there, brought to this one by the camera's motion (:class:`NearbyGround`): the
   ground a running animal uncovers behind it, which colour and motion take for the animal.
@@ -121,7 +121,7 @@ class PropagationSettings:
         goat from 0.800 to 0.810, and of the five others from 0.639 to 0.640 (0.2 and 0.45,
         in a prototype: 0.805 / 0.639 and 0.816 / 0.637).
     still_weight : float
-        Weight of the still background's cue (:func:`still_ratios`: how unlike the clip's
+        Weight of the still background's cue (:meth:`StillBackground.ratios`: how unlike the clip's
         background a pixel looks) against colour, on a clip whose camera held still
         (:func:`camera_held_still`, :class:`StillBackground`); none is sought at 0. DAVIS's
         bear, dog and goat laid on still plates read 0.951 / 0.831 / 0.588 at 1 and 0.953 /
@@ -556,7 +556,7 @@ far less (DAVIS's bear, dog, goat and five other animal clips at most 0.51), and
 Muybridge's race horse, a loop that keeps the horse in place (0.48 to 0.79)."""
 
 _STILL_BINS = 17
-"""Bins of :func:`still_ratios`: half octaves of the difference from the still background,
+"""Bins of :meth:`StillBackground.ratios`: half octaves of the difference from the still background,
 from 0 to 255 levels."""
 
 
@@ -620,44 +620,40 @@ class StillBackground:
         image[known] = np.nanmedian(stack[:, known], axis=0).round().astype(np.uint8)
         return cls(image, known)
 
-    def window(self, x0: int, y0: int, x1: int, y1: int) -> StillBackground:
-        """The part within ``x0 <= x < x1``, ``y0 <= y < y1`` (a propagated frame's window)."""
-        return StillBackground(self.image[y0:y1, x0:x1], self.known[y0:y1, x0:x1])
+    def ratios(self, image: np.ndarray, prob: np.ndarray, window: tuple[int, int, int, int]
+               ) -> np.ndarray | None:
+        """How much more likely each pixel of a propagated frame's ``window`` (``image``,
+        BGR uint8; ``prob``, its warped mask in [0, 1]) is the subject, by how unlike this
+        background it looks.
 
+        Returns
+        -------
+        ndarray of shape (h, w), float32, or None
+            Log-likelihood ratios within +-3 (0 where the background is not known), learnt on
+            this frame from the warped mask's sure sides as :func:`motion_ratios`' are; None
+            when the mask has too few sure pixels.
 
-def still_ratios(image: np.ndarray, background: StillBackground, prob: np.ndarray
-                 ) -> np.ndarray | None:
-    """How much more likely each pixel is the subject, by how unlike the still background
-    it looks.
-
-    Parameters
-    ----------
-    image : ndarray of shape (h, w, 3), uint8
-        This frame's window.
-    background : StillBackground
-        The same window of the clip's (:meth:`StillBackground.window`).
-    prob : ndarray of shape (h, w), float32
-        The warped mask in [0, 1].
-
-    Returns
-    -------
-    ndarray of shape (h, w), float32, or None
-        Log-likelihood ratios within +-3 (0 where the background is not known), learnt on
-        this frame from the warped mask's sure sides as :func:`motion_ratios`' are; None when
-        the mask has too few sure pixels.
-
-    Notes
-    -----
-    The difference is the largest of the three channels', binned in half octaves
-    (:data:`_STILL_BINS`). Unlike motion, it tells a planted foot from the ground it stands
-    on, and a leg of the ground's own colours from the ground the background shows there.
-    """
-    return _ground_ratios(cv2.absdiff(image, background.image).max(axis=2), background.known,
-                          prob)
+        Notes
+        -----
+        The difference is the largest of the three channels', binned in half octaves
+        (:data:`_STILL_BINS`). Unlike motion, it tells a planted foot from the ground it
+        stands on, and a leg of the ground's own colours from the ground the background shows
+        there.
+        """
+        x0, y0, x1, y1 = window
+        diff = _largest_difference(image, self.image[y0:y1, x0:x1])[0]
+        return _ground_ratios(diff, self.known[y0:y1, x0:x1], prob)
 
 
 _DIFF_BINS = np.clip(2 * np.log2(np.arange(256, dtype=np.float32) + 1), 0, _STILL_BINS - 1
                      ).astype(np.intp)
+
+
+def _largest_difference(image: np.ndarray, other: np.ndarray) -> list[np.ndarray]:
+    """Per pixel, the largest of B, G and R's absolute differences between two uint8 images,
+    then the difference of each further channel (an alpha), as planes."""
+    blue, green, red, *rest = cv2.split(cv2.absdiff(image, other))
+    return [cv2.max(cv2.max(blue, green), red), *rest]
 
 
 def _sorted(planes: list[np.ndarray]) -> list[np.ndarray]:
@@ -672,8 +668,8 @@ def _sorted(planes: list[np.ndarray]) -> list[np.ndarray]:
 
 
 def _ground_ratios(diff: np.ndarray, known: np.ndarray, prob: np.ndarray) -> np.ndarray | None:
-    """:func:`still_ratios` from each pixel's difference from the ground behind it (uint8;
-    ``known``: where that ground was seen)."""
+    """:meth:`StillBackground.ratios` from each pixel's difference from the ground behind it
+    (uint8; ``known``: where that ground was seen)."""
     if np.count_nonzero(prob > 0.9) < 16:
         return None
     bins = _DIFF_BINS[diff]
@@ -725,42 +721,50 @@ class NearbyGround:
     legs from 0.579 to 0.549: a thin leg matches the ground beside it.
 
     A pass adds each frame before it is decided (:meth:`add`, ``nearby_reach`` frames ahead),
-    and settles its mask once it is (:meth:`settle`); frames are counted along the pass.
+    and settles its mask once it is (:meth:`settle`), in the pass's order.
     """
 
-    def __init__(self, settings: PropagationSettings) -> None:
+    def __init__(self, settings: PropagationSettings, mask: np.ndarray) -> None:
+        """For a pass from a key frame whose mask (0/1, working size) is ``mask``."""
         self.reach, self.step = settings.nearby_reach, settings.nearby_step
         self.frames: dict[int, np.ndarray] = {}
-        self.greys: dict[int, np.ndarray] = {}
         self.onward: dict[int, np.ndarray | None] = {}
         self.centres: dict[int, np.ndarray] = {}
+        self.latest = mask
+        self.added = self.deciding = 0
+        self._grey: np.ndarray | None = None
 
-    def add(self, i: int, small: np.ndarray, grey: np.ndarray, near: np.ndarray) -> None:
-        """Frame ``i`` of the pass (BGR and grey, working size), ahead of the one being decided,
-        whose latest mask ``near`` (0/1) keeps the camera's corners off the animal."""
-        self.frames[i], self.greys[i] = cv2.cvtColor(small, cv2.COLOR_BGR2BGRA), grey
-        if i - 1 in self.greys:
-            x, y, w, h = cv2.boundingRect(near)
+    def add(self, small: np.ndarray, grey: np.ndarray) -> None:
+        """The pass's next frame (BGR and grey, working size), ahead of the one being decided;
+        the pass's latest mask keeps the camera's corners off the animal."""
+        i, self.added = self.added, self.added + 1
+        self.frames[i] = cv2.cvtColor(small, cv2.COLOR_BGR2BGRA)
+        if self._grey is not None:
+            x, y, w, h = cv2.boundingRect(self.latest)
             grow = round(0.25 * max(w, h))
             off = np.ones(grey.shape, bool)
             off[max(0, y - grow):y + h + grow, max(0, x - grow):x + w + grow] = False
-            self.onward[i - 1] = camera_motion(self.greys[i - 1], grey, off)
+            self.onward[i - 1] = camera_motion(self._grey, grey, off)
+        self._grey = grey
 
-    def settle(self, i: int, mask: np.ndarray) -> None:
-        """Frame ``i``'s mask, decided: where it shows the ground to the frames after it."""
+    def settle(self, mask: np.ndarray) -> None:
+        """The mask of the frame being decided (the key frame's first): where it shows the
+        ground to the frames after it. The next frame is decided then."""
+        i, self.deciding, self.latest = self.deciding, self.deciding + 1, mask
         self.frames[i][..., 3] = 255 - 255 * cv2.dilate(mask, disk(3))
         moments = cv2.moments(mask, True)
         if moments["m00"] > 0:
             self.centres[i] = np.array([moments["m10"], moments["m01"]]) / moments["m00"]
         for gone in [j for j in self.frames if j < i - self.reach]:
-            for kept in (self.frames, self.greys, self.onward, self.centres):
+            for kept in (self.frames, self.onward, self.centres):
                 kept.pop(gone, None)
 
-    def ratios(self, i: int, image: np.ndarray, prob: np.ndarray,
-               window: tuple[int, int, int, int]) -> np.ndarray | None:
-        """:func:`still_ratios` of frame ``i``'s ``window`` (``image``), against the ground the
-        frames around it show there, with ``prob`` its warped mask; None where too few frames
-        around it are known."""
+    def ratios(self, image: np.ndarray, prob: np.ndarray, window: tuple[int, int, int, int]
+               ) -> np.ndarray | None:
+        """:meth:`StillBackground.ratios` of the ``window`` (``image``) of the frame being
+        decided, against the ground the frames around it show there, with ``prob`` its warped
+        mask; None where too few frames around it are known."""
+        i = self.deciding
         x0, y0, x1, y1 = window
         size = (x1 - x0, y1 - y0)
         shift = np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1]], np.float64)
@@ -775,8 +779,7 @@ class NearbyGround:
             # The fourth channel is 255 where that frame shows the ground (0 off the frame).
             seen = cv2.warpPerspective(self.frames[i + j], shift @ to_here, size,
                                        flags=cv2.INTER_LINEAR)
-            *bgr, hidden = cv2.split(cv2.absdiff(here, seen))
-            diff = cv2.max(cv2.max(bgr[0], bgr[1]), bgr[2])
+            diff, hidden = _largest_difference(here, seen)
             diff = cv2.max(diff, cv2.threshold(hidden, 0, 255, cv2.THRESH_BINARY)[1])
             if j > 0:  # the animal there: this frame's, moved on over the ground
                 ahead = cv2.warpAffine(inside, np.float32([[1, 0, j * pace[0]],
@@ -979,7 +982,7 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
     motion : ndarray of shape (h, w), float32, optional
         The motion cue (:attr:`Warp.motion`), weighed by ``motion_weight``.
     ground : ndarray of shape (h, w), float32, optional
-        The cue of the ground behind the animal (:func:`still_ratios`,
+        The cue of the ground behind the animal (:meth:`StillBackground.ratios`,
         :meth:`NearbyGround.ratios`), weighed by ``ground_weight``.
 
     Returns

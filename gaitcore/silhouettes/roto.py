@@ -18,7 +18,7 @@ of megabytes; frames are decoded again when a backward pass needs them.
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Callable, Collection, Generator, Iterator, Sequence
+from collections.abc import Callable, Collection, Generator, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -55,7 +55,6 @@ from gaitcore.silhouettes.propagate import (
     make_flow,
     may_hold_still,
     overlap,
-    still_ratios,
     warp_mask,
 )
 from gaitcore.silhouettes.sketch import rasterize_strokes
@@ -117,7 +116,7 @@ class RotoSegmentation:
         After :meth:`run`, when the camera held still (:func:`camera_held_still` of
         :data:`STILL_FRAMES` frames sampled across the clip): what lies behind the animal,
         learnt from the frames the first cut's own pass leaves free; the clip is then
-        carried again with it as a cue (:func:`still_ratios`). Corrections keep it.
+        carried again with it as a cue (:meth:`StillBackground.ratios`). Corrections keep it.
 
     Raises
     ------
@@ -481,47 +480,31 @@ class RotoSegmentation:
     def _carry(self, mask: np.ndarray, key: int, frames, store: PackedMasks,
                progress, done, total) -> None:
         flow_of = make_flow(self.s)
-        nearby = (NearbyGround(self.s) if self.still is None and self.s.nearby_weight > 0
+        nearby = (NearbyGround(self.s, mask) if self.still is None and self.s.nearby_weight > 0
                   else None)
         prev = grey_prev = models = exposure = None
-        for i, (t, small, grey) in enumerate(self._ahead(frames, nearby, lambda: mask)):
+        for t, small, grey in _ahead(frames, nearby):
             if t == key:
                 models = key_colours(small, mask, self.s)
                 exposure = ExposureTrack(grey, mask, self.s, small)
             else:
                 cut = self._step(mask, (prev, small), (grey_prev, grey), flow_of, models,
-                                 exposure, (nearby, i))
+                                 exposure, nearby)
                 store.put(t, cut)
                 mask = cut.mask
                 done[0] += 1
                 report(progress, done[0], max(total, done[0]), "segmentation cancelled")
             if nearby is not None:
-                nearby.settle(i, mask)
+                nearby.settle(mask)
             prev, grey_prev = small, grey
 
-    def _ahead(self, frames, nearby: NearbyGround | None, latest: Callable[[], np.ndarray]
-               ) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
-        """A pass's frames with their grey, each given to ``nearby`` (when there is one)
-        ``nearby_reach`` frames before it is decided, with the latest mask of the pass."""
-        reach = 0 if nearby is None else nearby.reach
-        queue: deque[tuple[int, np.ndarray, np.ndarray]] = deque()
-        for i, (t, small) in enumerate(frames):
-            grey = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
-            if nearby is not None:
-                nearby.add(i, small, grey, latest())
-            queue.append((t, small, grey))
-            if len(queue) > reach:
-                yield queue.popleft()
-        yield from queue
-
     def _step(self, mask, colours, greys, flow_of, models,
-              exposure: ExposureTrack | None,
-              nearby: tuple[NearbyGround | None, int] = (None, 0)) -> Cut:
+              exposure: ExposureTrack | None, nearby: NearbyGround | None = None) -> Cut:
         """One propagated frame (``colours`` and ``greys``: the previous frame and this one),
         brought back to its key frame's exposure and colour balance (``exposure`` follows
         them) before the key's colours judge it: a camera's auto-exposure and white balance,
-        or Muybridge's plates, each printed lighter or darker. ``nearby``: the pass's ground
-        around its frames and this frame's place in the pass."""
+        or Muybridge's plates, each printed lighter or darker. What lies behind the animal
+        is the clip's still background when there is one, else the pass's ``nearby`` ground."""
         small = colours[1]
         if models is None or exposure is None:
             return Cut(mask, 0.0)
@@ -530,18 +513,13 @@ class RotoSegmentation:
         warp = warp_mask(mask, greys[0], greys[1], flow_of, self.s, colours=colours)
         gains = exposure.step(warp)
         x0, y0, x1, y1 = warp.window
-        ground, i = nearby
-        if self.still is not None:
-            still = still_ratios(small[y0:y1, x0:x1], self.still.window(x0, y0, x1, y1),
-                                 warp.prob)
-            weight = self.s.still_weight
-        elif ground is not None:
-            still = ground.ratios(i, small[y0:y1, x0:x1], warp.prob, warp.window)
-            weight = self.s.nearby_weight
-        else:
-            still, weight = None, 0.0
+        behind: StillBackground | NearbyGround | None = (
+            self.still if self.still is not None else nearby)
+        weight = self.s.still_weight if self.still is not None else self.s.nearby_weight
+        ground = None if behind is None else behind.ratios(small[y0:y1, x0:x1], warp.prob,
+                                                           warp.window)
         cut = fuse_cut(exposed(small[y0:y1, x0:x1], gains), warp.prob, warp.trust, models,
-                       self.s, warp.motion, still, weight)
+                       self.s, warp.motion, ground, weight)
         out = np.zeros_like(mask)
         out[y0:y1, x0:x1] = cut.mask
         return Cut(out, cut.confidence)
@@ -604,6 +582,22 @@ class RotoSegmentation:
         soft = (w * cv2.GaussianBlur(f.mask.astype(np.float32), (0, 0), 1.5)
                 + (1 - w) * cv2.GaussianBlur(g.mask.astype(np.float32), (0, 0), 1.5))
         return Cut((soft > 0.5).astype(np.uint8), w * f.confidence + (1 - w) * g.confidence)
+
+
+def _ahead(frames: Iterable[tuple[int, np.ndarray]], nearby: NearbyGround | None
+           ) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+    """A pass's frames with their grey, each given to ``nearby`` (when there is one)
+    ``nearby_reach`` frames before it is decided."""
+    reach = 0 if nearby is None else nearby.reach
+    queue: deque[tuple[int, np.ndarray, np.ndarray]] = deque()
+    for t, small in frames:
+        grey = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
+        if nearby is not None:
+            nearby.add(small, grey)
+        queue.append((t, small, grey))
+        if len(queue) > reach:
+            yield queue.popleft()
+    yield from queue
 
 
 def _keeping(stream: Generator[tuple[int, np.ndarray], None, None], picks: Collection[int],
