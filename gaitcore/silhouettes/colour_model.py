@@ -267,13 +267,17 @@ class ColourTable:
         return self.llr[bin_index(image, self.bits)]
 
 
-def learn_colours(image: np.ndarray, mask: np.ndarray) -> ColourTable | None:
+def learn_colours(image: np.ndarray, mask: np.ndarray,
+                  taught: tuple[np.ndarray, np.ndarray] | None = None) -> ColourTable | None:
     """The colour mixtures of a frame whose silhouette is known, tabulated.
 
     Parameters
     ----------
     image : ndarray of shape (h, w, 3), uint8
     mask : ndarray of shape (h, w), uint8 0/1
+    taught : (ndarray of shape (n, 3) uint8, ndarray of shape (n,) uint8 0/1), optional
+        More pixels and their sides, learnt from beside the image's (an artist's strokes);
+        the gap is still measured on the image alone.
 
     Returns
     -------
@@ -284,7 +288,11 @@ def learn_colours(image: np.ndarray, mask: np.ndarray) -> ColourTable | None:
     The mixtures are the graph cut's own (five Gaussians per side in BGR, learnt by
     ``cv2.grabCut`` from the mask as sure labels).
     """
-    mixtures = _mixtures(image, mask, 1)
+    if taught is None or not len(taught[1]):
+        mixtures = _mixtures(image, mask, 1)
+    else:
+        mixtures = _mixtures(np.concatenate([image.reshape(-1, 3), taught[0]])[None],
+                             np.concatenate([mask.reshape(-1), taught[1]])[None], 1)
     if mixtures is None:
         return None
     fgd, bgd = mixtures

@@ -485,7 +485,7 @@ class RotoSegmentation:
         prev = grey_prev = models = exposure = None
         for t, small, grey in _ahead(frames, nearby):
             if t == key:
-                models = key_colours(small, mask, self.s)
+                models = key_colours(small, mask, self.s, self._stroke_masks(t)[1])
                 exposure = ExposureTrack(grey, mask, self.s, small)
             else:
                 cut = self._step(mask, (prev, small), (grey_prev, grey), flow_of, models,

@@ -960,3 +960,32 @@ def test_the_cameras_motion_is_found_off_the_animal():
     expected = cv2.transform(corners, turn)
     assert np.abs(cv2.perspectiveTransform(corners, found) - expected).max() < 0.5
     assert camera_motion(np.zeros((200, 300), np.uint8), later, ~animal) is None
+
+
+def test_a_stroke_teaches_its_key_frames_colours_beyond_the_mask_it_left():
+    """A corrected key frame whose mask still holds part of the shadow a background stroke
+    was drawn on (the cut turned the stroke's band, not the whole shadow): the colours its
+    passes learn call the shadow background, as the stroke says; learnt from the key's mask
+    alone they call it subject."""
+    from dataclasses import replace
+
+    from gaitcore.silhouettes.propagate import PropagationSettings, key_colours
+
+    rng = np.random.default_rng(11)
+    image = np.clip(rng.normal([90, 150, 170], 8, (120, 160, 3)), 0, 255).astype(np.uint8)
+    body = np.zeros((120, 160), np.uint8)
+    cv2.ellipse(body, (70, 50), (40, 18), 0, 0, 360, 1, -1)
+    shadow = np.zeros_like(body)
+    cv2.rectangle(shadow, (50, 68), (100, 95), 1, -1)
+    image[body > 0] = np.clip(rng.normal([40, 60, 110], 8, (int(body.sum()), 3)), 0, 255)
+    image[shadow > 0] = np.clip(rng.normal([50, 55, 60], 6, (int(shadow.sum()), 3)), 0, 255)
+    stroke = np.zeros(body.shape, bool)
+    stroke[76:88, 55:95] = True  # along the shadow's middle
+    left = shadow.copy()
+    left[74:96] = 0  # what the key's mask kept of it
+    mask = body | left
+    settings = PropagationSettings()
+    taught = key_colours(image, mask, settings, stroke)
+    untaught = key_colours(image, mask, replace(settings, stroke_teaching=0), stroke)
+    assert np.median(taught(image)[shadow > 0]) < 0 < np.median(untaught(image)[shadow > 0])
+    assert np.median(taught(image)[body > 0]) > 0
