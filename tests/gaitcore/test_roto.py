@@ -989,3 +989,20 @@ def test_a_stroke_teaches_its_key_frames_colours_beyond_the_mask_it_left():
     untaught = key_colours(image, mask, replace(settings, stroke_teaching=0), stroke)
     assert np.median(taught(image)[shadow > 0]) < 0 < np.median(untaught(image)[shadow > 0])
     assert np.median(taught(image)[body > 0]) > 0
+
+
+def test_the_nearby_grounds_difference_is_the_median_of_the_frames_that_saw_it():
+    """Each pixel's difference from the nearby ground is the (lower) median of the
+    differences of the frames that saw the ground there (255: hidden by the animal)."""
+    from gaitcore.silhouettes.propagate import _picked, _sorted
+
+    rng = np.random.default_rng(2)
+    planes = [np.where(rng.random((40, 50)) < 0.3, 255, rng.integers(0, 255, (40, 50)))
+              .astype(np.uint8) for _ in range(8)]
+    seen = np.stack(planes) < 255
+    count = seen.sum(axis=0)
+    middle = _picked(_sorted(planes), (np.maximum(count, 1) - 1) // 2)
+    values = np.sort(np.where(seen, np.stack(planes).astype(int), 256), axis=0)
+    expected = np.take_along_axis(values, ((np.maximum(count, 1) - 1) // 2)[None], 0)[0]
+    assert np.array_equal(middle[count > 0], expected[count > 0])
+    assert (middle[count == 0] == 255).all()
