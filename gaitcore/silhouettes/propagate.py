@@ -224,6 +224,9 @@ class PropagationSettings:
             )
         if not 0 < self.max_shrink < 1 < self.max_growth:
             raise GaitInputError("need 0 < max_shrink < 1 < max_growth")
+        if self.stroke_teaching < 0:
+            raise GaitInputError(f"stroke_teaching={self.stroke_teaching}: use 0 or more (how "
+                                 "many times more a background stroke's pixels count)")
 
 
 @dataclass(frozen=True)

@@ -989,6 +989,8 @@ def test_a_stroke_teaches_its_key_frames_colours_beyond_the_mask_it_left():
     untaught = key_colours(image, mask, replace(settings, stroke_teaching=0), stroke)
     assert np.median(taught(image)[shadow > 0]) < 0 < np.median(untaught(image)[shadow > 0])
     assert np.median(taught(image)[body > 0]) > 0
+    with pytest.raises(GaitInputError, match="stroke_teaching"):
+        PropagationSettings(stroke_teaching=-1)
 
 
 def test_the_nearby_grounds_difference_is_the_median_of_the_frames_that_saw_it():
