@@ -288,7 +288,7 @@ def learn_colours(image: np.ndarray, mask: np.ndarray,
     The mixtures are the graph cut's own (five Gaussians per side in BGR, learnt by
     ``cv2.grabCut`` from the mask as sure labels).
     """
-    if taught is None or not len(taught[1]):
+    if taught is None:
         mixtures = _mixtures(image, mask, 1)
     else:
         mixtures = _mixtures(np.concatenate([image.reshape(-1, 3), taught[0]])[None],

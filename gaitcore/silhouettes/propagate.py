@@ -14,10 +14,11 @@ is brought to about ``subject_side_px`` pixels, enough to keep thin legs while s
   camera's and the ground's motion, a homography fitted to the flow off the mask) is more
   likely the subject (:func:`motion_ratios`). When the camera held still (a tripod shot), so
   is what looks unlike the ground behind the animal (:class:`StillBackground`,
-  :meth:`StillBackground.ratios`): a planted foot, or a leg of the ground's own colours. When it did not
-  (a camera panning after the animal), the ground behind the animal is what the frames either
-  side show there, brought to this one by the camera's motion (:class:`NearbyGround`): the
-  ground a running animal uncovers behind it, which colour and motion take for the animal.
+  :meth:`StillBackground.ratios`): a planted foot, or a leg of the ground's own colours. When
+  it did not (a camera panning after the animal), the ground behind the animal is what the
+  frames either side show there, brought to this one by the camera's motion
+  (:class:`NearbyGround`): the ground a running animal uncovers behind it, which colour and
+  motion take for the animal.
   Parts of the mask that drift away from the body (background the flow carried along) are
   dropped.
 - A result whose area jumps away from the warped mask's (a flood into the ground, or a
@@ -136,8 +137,8 @@ class PropagationSettings:
         goat from 0.800 to 0.810, and of the five others from 0.639 to 0.640 (0.2 and 0.45,
         in a prototype: 0.805 / 0.639 and 0.816 / 0.637).
     still_weight : float
-        Weight of the still background's cue (:meth:`StillBackground.ratios`: how unlike the clip's
-        background a pixel looks) against colour, on a clip whose camera held still
+        Weight of the still background's cue (:meth:`StillBackground.ratios`: how unlike the
+        clip's background a pixel looks) against colour, on a clip whose camera held still
         (:func:`camera_held_still`, :class:`StillBackground`); none is sought at 0. DAVIS's
         bear, dog and goat laid on still plates read 0.951 / 0.831 / 0.588 at 1 and 0.953 /
         0.861 / 0.598 at 2, against 0.929 / 0.689 / 0.490 without.
@@ -352,7 +353,7 @@ def key_colours(small: np.ndarray, mask: np.ndarray, settings: PropagationSettin
         return None
     x0, y0, x1, y1 = window(mask, settings)
     taught = None
-    if background is not None and background.any():
+    if settings.stroke_teaching and background is not None and background.any():
         pixels = np.tile(small[background], (settings.stroke_teaching, 1))
         taught = pixels, np.zeros(len(pixels), np.uint8)
     return learn_colours(small[y0:y1, x0:x1], mask[y0:y1, x0:x1], taught)
@@ -580,8 +581,8 @@ far less (DAVIS's bear, dog, goat and five other animal clips at most 0.51), and
 Muybridge's race horse, a loop that keeps the horse in place (0.48 to 0.79)."""
 
 _STILL_BINS = 17
-"""Bins of :meth:`StillBackground.ratios`: half octaves of the difference from the still background,
-from 0 to 255 levels."""
+"""Bins of :meth:`StillBackground.ratios`: half octaves of the difference from the still
+background, from 0 to 255 levels."""
 
 
 def camera_held_still(frames: Sequence[np.ndarray]) -> bool:

@@ -513,9 +513,9 @@ class RotoSegmentation:
         warp = warp_mask(mask, greys[0], greys[1], flow_of, self.s, colours=colours)
         gains = exposure.step(warp)
         x0, y0, x1, y1 = warp.window
-        behind: StillBackground | NearbyGround | None = (
-            self.still if self.still is not None else nearby)
-        weight = self.s.still_weight if self.still is not None else self.s.nearby_weight
+        behind: StillBackground | NearbyGround | None
+        behind, weight = ((self.still, self.s.still_weight) if self.still is not None
+                          else (nearby, self.s.nearby_weight))
         ground = None if behind is None else behind.ratios(small[y0:y1, x0:x1], warp.prob,
                                                            warp.window)
         cut = fuse_cut(exposed(small[y0:y1, x0:x1], gains), warp.prob, warp.trust, models,
