@@ -32,7 +32,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
 
 from gaitcore.errors import GaitInputError
 from gaitcore.rig.skeleton import Skeleton
@@ -299,6 +298,8 @@ def _limb_trajectory(spec: GaitSpec, limb: str, t: np.ndarray, toe_rest_x: float
     breakover = -35.0
     ub = np.clip((u / beta - 0.8) / 0.2, 0.0, 1.0)
     pitch_stance = breakover * ub * ub * (3 - 2 * ub)
+    from scipy.interpolate import PchipInterpolator  # scipy.interpolate: 0.2 s to import
+
     tuck = PchipInterpolator([0.0, 0.35, 0.85, 1.0], [breakover, spec.tuck_deg, 8.0, 0.0])
     pitch = np.where(swing, tuck(us), pitch_stance)
     # swing weight of the synergies: 0 in loaded stance, rising through breakover and the
