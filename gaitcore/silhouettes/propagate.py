@@ -160,7 +160,10 @@ class PropagationSettings:
         of what the key frame's mask did is lost: the mask slid onto the background. On
         DAVIS libby (a dog running behind poles and trees) the mask had left the dog by frame
         25 and sat on the background at a confidence of 0.8 to 0.9; its share fell to 0.5,
-        while on seven other clips it never fell under 0.82.
+        while on seven other clips it never fell under 0.82 from the box. A better first
+        frame can raise the key's gap beyond what later frames show, right masks included
+        (DAVIS goat, two scripted strokes on frame 0: shares of 0.5 to 0.6 from frame 41 on):
+        once the subject was found again, a pass measures from the gap it shows then.
     match_exposure : bool
         Bring each propagated frame back to its key frame's exposure and colour balance before
         the key's colours judge it (see :class:`ExposureTrack`; off only to measure what it
@@ -998,7 +1001,8 @@ def exposed(small: np.ndarray, gains: float | Sequence[float] | np.ndarray) -> n
 
 def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: ColourTable,
              settings: PropagationSettings, motion: np.ndarray | None = None,
-             ground: np.ndarray | None = None, ground_weight: float = 0.0) -> Cut:
+             ground: np.ndarray | None = None, ground_weight: float = 0.0, *,
+             gap: float | None = None) -> Cut:
     """Decide one window of a propagated frame from its colours and the warped mask.
 
     Parameters
@@ -1018,6 +1022,10 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
     ground : ndarray of shape (h, w), float32, optional
         The cue of the ground behind the animal (:meth:`StillBackground.ratios`,
         :meth:`NearbyGround.ratios`), weighed by ``ground_weight``.
+    gap : float, optional
+        How far a mask that has not slid stands out from its surroundings under ``colours``
+        (:func:`~gaitcore.silhouettes.colour_model.colour_gap`): the key frame's,
+        ``colours.gap``, by default; 0 does not test it.
 
     Returns
     -------
@@ -1025,8 +1033,8 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
         The kept warped mask (confidence 0) when the result's area jumped (flood, collapse);
         an empty mask when the warped mask's pixels mostly do not look like the subject
         (it has left, or is hidden), or when the mask no longer stands out from its
-        surroundings under the key's colours ``lost_gap`` as well as the key frame's did (it
-        slid onto the background).
+        surroundings under the key's colours ``lost_gap`` as well as ``gap`` says (it slid
+        onto the background).
 
     Notes
     -----
@@ -1070,8 +1078,8 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
         cut = (Cut(mask, overlap(mask, inside))
                if settings.max_shrink * prior_area <= area <= settings.max_growth * prior_area
                else Cut(inside, 0.0))
-        gone = (colours.gap > 0
-                and colour_gap(ratios, cut.mask > 0) < settings.lost_gap * colours.gap)
+        reference = colours.gap if gap is None else gap
+        gone = reference > 0 and colour_gap(ratios, cut.mask > 0) < settings.lost_gap * reference
     return Cut(np.zeros_like(inside), 0.0) if gone else cut
 
 

@@ -547,6 +547,31 @@ def test_a_mask_that_no_longer_stands_out_from_its_surroundings_is_lost():
     assert overlap(fuse_cut(darker, prior, trusted, colours, settings).mask, body) > 0.9
 
 
+def test_a_subject_found_again_is_not_lost_again_by_the_gap_it_was_found_with():
+    """From frame 3, bands of the subject's brown cover the ground above and below it: its
+    mask stands out from its surroundings far less than on the key frame, and frame 3 is
+    lost. The search finds the body again on frame 4; the frames after it are measured from
+    the gap the body shows there, not lost one in two (as DAVIS goat was, from frame 41 on,
+    with a better first frame)."""
+    rng = np.random.default_rng(3)
+    green, brown = np.array([60, 140, 70]), np.array([40, 80, 160])
+    frames, truth = [], []
+    for t in range(8):
+        image = np.clip(rng.normal(green, 8, (120, 160, 3)), 0, 255).astype(np.uint8)
+        if t >= 3:
+            for rows in (slice(0, 35), slice(85, 120)):
+                image[rows] = np.clip(rng.normal(brown, 8, image[rows].shape), 0, 255)
+        body = np.zeros((120, 160), np.uint8)
+        cv2.ellipse(body, (60 + 2 * t, 60), (35, 18), 0, 0, 360, 1, -1)
+        image[body > 0] = np.clip(rng.normal(brown, 8, (int(body.sum()), 3)), 0, 255)
+        frames.append(image)
+        truth.append(body > 0)
+    seg = RotoSegmentation(frames, box=Rect(20, 38, 84, 44))
+    seg.run()
+    assert [seg.state(t).lost for t in range(8)] == [t == 3 for t in range(8)]
+    assert all(overlap(seg.mask(t), truth[t]) > 0.9 for t in range(8) if t != 3)
+
+
 def test_what_moves_unlike_the_ground_is_told_from_it_where_colour_cannot():
     """An animal of the ground's own colours, held still by a panning camera while the ground
     slides 3 pixels a frame, its mask carried 6 pixels wrong: the motion cue says subject on
