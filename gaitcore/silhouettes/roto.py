@@ -490,12 +490,14 @@ class RotoSegmentation:
                 gap = 0.0 if models is None else models.gap
                 exposure = ExposureTrack(grey, mask, self.s, small)
             else:
-                searching = mask.sum() < self.s.lost_frac * self.key_area
-                cut, shown = self._step(mask, (prev, small), (grey_prev, grey), flow_of, models,
-                                        exposure, nearby, gap=gap, anchor=found)
-                if found and shown > 0:
-                    gap = min(gap, shown)
-                found = searching and bool(cut.mask.any())
+                if models is not None and mask.sum() < self.s.lost_frac * self.key_area:
+                    cut = Cut(find_again(small, models, self.key_area, self.s), 0.0)
+                    found = bool(cut.mask.any())
+                else:
+                    cut, shown = self._step(mask, (prev, small), (grey_prev, grey), flow_of,
+                                            models, exposure, nearby, gap=gap, anchor=found)
+                    gap = min(gap, shown) if shown > 0 else gap
+                    found = False
                 store.put(t, cut)
                 mask = cut.mask
                 done[0] += 1
@@ -515,16 +517,15 @@ class RotoSegmentation:
 
         The mask is lost when it stands out from its surroundings less than ``lost_gap`` of
         ``gap`` (see :func:`fuse_cut`). On the frame after the subject was searched for and
-        found again (``anchor``) it is not tested, and the gap it shows is returned beside
-        the cut (0 otherwise): the pass measures slides from it from then on. The key's own
-        gap is no yardstick there: the search found the subject by those very colours, and
-        on DAVIS goat with a better first frame (two scripted strokes on it), its taller
-        gap had every other frame from 41 on lost and found again, the clip 0.801 -> 0.617."""
+        found again (``anchor``, by :meth:`_carry`) it is not tested, and the gap it shows is
+        returned beside the cut (0 otherwise): the pass measures slides from it from then on.
+        The key's own gap is no yardstick there: the search found the subject by those very
+        colours, and on DAVIS goat with a better first frame (two scripted strokes on it),
+        its taller gap had every other frame from 41 on lost and found again, the clip 0.801
+        -> 0.617."""
         small = colours[1]
         if models is None or exposure is None:
             return Cut(mask, 0.0), 0.0
-        if mask.sum() < self.s.lost_frac * self.key_area:
-            return Cut(find_again(small, models, self.key_area, self.s), 0.0), 0.0
         warp = warp_mask(mask, greys[0], greys[1], flow_of, self.s, colours=colours)
         gains = exposure.step(warp)
         x0, y0, x1, y1 = warp.window
