@@ -118,7 +118,7 @@ def resumed(session: RotoSession | None, source: FrameSource, project: Project, 
     """A session on ``project``'s segmentation of ``source``, for
     :func:`~gaitcore.project.roto_session.corrected`: ``session`` back in the state matching
     ``project``, else the engine saved beside project file ``saved`` put back (the clip is not
-    decoded); None when neither holds it (the clip must be segmented again)."""
+    cut again); None when neither holds it (the clip must be segmented again)."""
     use = reusable(session, source, project)
     if use is not None:
         return use

@@ -127,8 +127,9 @@ class RotoSession:
     def from_state(cls, source: FrameSource, project: Project,
                    state: RotoState) -> RotoSession | None:
         """The session of ``project`` put back from a state kept by :meth:`state_for`,
-        without decoding the clip (frame 0 only); None when the state does not fit the
-        project's clip, working size or corrected frames (then :meth:`start`)."""
+        without cutting the clip again (its frames are read once, for the masks' outlines);
+        None when the state does not fit the project's clip, working size or corrected
+        frames (then :meth:`start`)."""
         try:
             engine = _engine(source, project, project.scribbles)
         except GaitInputError:

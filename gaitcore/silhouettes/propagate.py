@@ -284,25 +284,82 @@ class WorkingSize:
         x1, y1 = min(self.wh[0], int(np.ceil(x + w))), min(self.wh[1], int(np.ceil(y + h)))
         return x0, y0, max(0, x1 - x0), max(0, y1 - y0)
 
-    def enlarge(self, small: np.ndarray) -> np.ndarray:
-        """A working-size 0/1 mask as a full-frame bool mask (bilinear, above one half),
-        computed only around the mask."""
+    def enlarge(self, small: np.ndarray, image: np.ndarray | None = None) -> np.ndarray:
+        """A working-size 0/1 mask as a full-frame bool mask, computed only around the mask.
+
+        Bilinear (above one half) without ``image``. With the source frame (BGR or grey,
+        uint8) the outline follows its edges below the working size: a guided filter
+        (He et al. 2010) fitted at the working size, mask against grey level within
+        :data:`EDGE_RADIUS` working pixels, is applied to the full-size grey (He and Sun's
+        fast guided filter, 2015). On 8 DAVIS clips from 3 starts each, from a box: mean IoU
+        0.8267 -> 0.8300 on bear, dog and goat and 0.6889 -> 0.6929 on five others, no run
+        lower; after the scripted strokes, 0.885 -> 0.889 and 0.785 -> 0.798 (bear's legs
+        0.710 -> 0.729). It costs about 2 ms a frame, reading the frame again included.
+        """
         rows, cols = self.shape
         out = np.zeros((rows, cols), bool)
         x, y, w, h = cv2.boundingRect(small.astype(np.uint8))
         if w == 0:
             return out
+        pad = 1 if image is None else 2 * EDGE_RADIUS + 2
+        x0, y0 = max(0, x - pad), max(0, y - pad)
+        x1, y1 = min(self.wh[0], x + w + pad), min(self.wh[1], y + h + pad)
         fx, fy = cols / self.wh[0], rows / self.wh[1]
-        X0, Y0 = max(0, int((x - 1) * fx)), max(0, int((y - 1) * fy))
-        X1 = min(cols, int(np.ceil((x + w + 1) * fx)))
-        Y1 = min(rows, int(np.ceil((y + h + 1) * fy)))
-        # The sampling of cv2.resize on the whole mask: src = (dst + 1/2) / f - 1/2.
-        warp = np.array([[1 / fx, 0, (X0 + 0.5) / fx - 0.5], [0, 1 / fy, (Y0 + 0.5) / fy - 0.5]])
-        up = cv2.warpAffine(small.astype(np.uint8) * np.uint8(255), warp, (X1 - X0, Y1 - Y0),
-                            flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                            borderMode=cv2.BORDER_REPLICATE)
-        out[Y0:Y1, X0:X1] = up > 127
+        X0, Y0 = int(x0 * fx), int(y0 * fy)
+        X1, Y1 = min(cols, int(np.ceil(x1 * fx))), min(rows, int(np.ceil(y1 * fy)))
+
+        def up(plane: np.ndarray, left: int = 0, top: int = 0) -> np.ndarray:
+            """``plane`` (working size from ``(left, top)``) at the full size: the sampling
+            of cv2.resize on the whole mask, src = (dst + 1/2) / f - 1/2."""
+            warp = np.array([[1 / fx, 0, (X0 + 0.5) / fx - 0.5 - left],
+                             [0, 1 / fy, (Y0 + 0.5) / fy - 0.5 - top]])
+            return cv2.warpAffine(plane, warp, (X1 - X0, Y1 - Y0),
+                                  flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                                  borderMode=cv2.BORDER_REPLICATE)
+
+        if image is None:
+            out[Y0:Y1, X0:X1] = up(small.astype(np.uint8) * np.uint8(255)) > 127
+            return out
+        grey = image[Y0:Y1, X0:X1]
+        if grey.ndim == 3:
+            grey = cv2.cvtColor(grey, cv2.COLOR_BGR2GRAY)
+        level = grey.astype(np.float32) * np.float32(1 / 255)
+        # The grey at the working size: each working pixel's source pixels averaged (a box
+        # as wide, odd so that it stays centred), sampled at its centre.
+        width, height = (2 * int(f / 2) + 1 for f in (fx, fy))
+        shrink = np.array([[fx, 0, (x0 + 0.5) * fx - 0.5 - X0],
+                           [0, fy, (y0 + 0.5) * fy - 0.5 - Y0]])
+        guide = cv2.warpAffine(cv2.blur(level, (width, height)), shrink, (x1 - x0, y1 - y0),
+                               flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                               borderMode=cv2.BORDER_REPLICATE)
+        slope, offset = guided_coefficients(guide, small[y0:y1, x0:x1].astype(np.float32))
+        out[Y0:Y1, X0:X1] = up(slope, x0, y0) * level + up(offset, x0, y0) > 0.5
         return out
+
+
+EDGE_RADIUS = 2
+"""Working pixels either side over which :meth:`WorkingSize.enlarge` fits the mask to the grey
+level (1, 2 and 3 read 0.8291, 0.8301 and 0.8305 on the clips its docstring names)."""
+
+EDGE_EPS = 0.005
+"""The guided filter's regularisation, in squared grey levels of [0, 1]: flatter windows than
+about 0.07 of a level's spread keep the bilinear mask (0.001 to 0.02 read the same)."""
+
+
+def guided_coefficients(guide: np.ndarray, mask: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """The guided filter's averaged linear coefficients of ``mask`` against ``guide`` (grey
+    levels in [0, 1]; both float32, same shape): ``mask ~ slope * guide + offset`` locally."""
+    size = (2 * EDGE_RADIUS + 1,) * 2
+
+    def mean(a: np.ndarray) -> np.ndarray:
+        return cv2.boxFilter(a, -1, size, borderType=cv2.BORDER_REFLECT)
+
+    level = guide
+    mean_level, mean_mask = mean(level), mean(mask)
+    spread = mean(level * level) - mean_level * mean_level
+    slope = (mean(level * mask) - mean_level * mean_mask) / (spread + np.float32(EDGE_EPS))
+    return mean(slope), mean(mean_mask - slope * mean_level)
 
 
 @dataclass(frozen=True)

@@ -260,17 +260,22 @@ class RotoSegmentation:
         return lo, hi
 
     def mask(self, t: int) -> np.ndarray:
-        """Frame ``t``'s silhouette at the source size, (rows, cols) bool."""
-        return self.work.enlarge(self._final(t).mask)
+        """Frame ``t``'s silhouette at the source size, (rows, cols) bool, its outline on the
+        frame's edges (:meth:`~gaitcore.silhouettes.propagate.WorkingSize.enlarge`)."""
+        return self.frame(t)[0]
 
     def state(self, t: int) -> FrameState:
         """Lost, corrected and confidence of frame ``t``."""
         return self._state(t, self._final(t))
 
-    def frame(self, t: int) -> tuple[np.ndarray, FrameState]:
-        """:meth:`mask` and :meth:`state` of frame ``t``, its two passes blended once."""
+    def frame(self, t: int, image: np.ndarray | None = None) -> tuple[np.ndarray, FrameState]:
+        """:meth:`mask` and :meth:`state` of frame ``t``, its two passes blended once;
+        ``image`` is the source frame when the caller holds it (else it is read)."""
         cut = self._final(t)
-        return self.work.enlarge(cut.mask), self._state(t, cut)
+        if not cut.mask.any():
+            return np.zeros(self.work.shape, bool), self._state(t, cut)
+        image = check_frame(self.source[t] if image is None else image)
+        return self.work.enlarge(cut.mask, image), self._state(t, cut)
 
     def _state(self, t: int, cut: Cut) -> FrameState:
         lost = float(cut.mask.sum()) < self.s.lost_frac * self.key_area
@@ -440,14 +445,22 @@ class RotoSegmentation:
             self._backward(back, prev, progress, done, total)
         return (k if prev is None else prev + 1), nxt
 
+    def images(self, start: int = 0, stop: int | None = None
+               ) -> Generator[tuple[int, np.ndarray], None, None]:
+        """Source frames ``(t, image)``, ``start <= t < stop`` (to the end: None) in order,
+        decoded on a thread of their own a few frames ahead: for :meth:`frame`."""
+        return prefetched(self._decoded(start, self.n if stop is None else stop), 4)
+
     def _frames(self, start: int, stop: int) -> Generator[tuple[int, np.ndarray], None, None]:
         """Working-size frames ``start <= t < stop`` in order, decoded and shrunk on a
         thread of their own a few frames ahead (OpenCV lets go of the GIL in both)."""
+        return prefetched(self._shrunk(self._decoded(start, stop)), 4)
+
+    def _decoded(self, start: int, stop: int
+                 ) -> Generator[tuple[int, np.ndarray], None, None]:
         if hasattr(self.source, "iter_frames"):
-            stream = self.source.iter_frames(start, stop)
-        else:
-            stream = ((t, self.source[t]) for t in range(start, stop))
-        return prefetched(self._shrunk(stream), 4)
+            return self.source.iter_frames(start, stop)
+        return ((t, self.source[t]) for t in range(start, stop))
 
     def _shrunk(self, stream: Iterator[tuple[int, np.ndarray]]
                 ) -> Iterator[tuple[int, np.ndarray]]:

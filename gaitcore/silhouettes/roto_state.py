@@ -1,5 +1,6 @@
 """The state of a finished :class:`~gaitcore.silhouettes.roto.RotoSegmentation` as plain data,
-to keep it in a file and put it back without decoding the clip (frame 0 only).
+to keep it in a file and put it back without cutting the clip again (its frames are only
+read, to lay the masks' outlines on their edges).
 
 What a correction needs of the engine is its working size, the key frames' cuts, the masks
 the forward and backward passes carried, and the first cut's area; everything else (the

@@ -205,20 +205,25 @@ def collect_roto(seg: RotoSegmentation, mask_sink: MaskSink | None,
     """Every frame's mask of a finished propagation, all its components (legs may come
     apart), into the ROI accumulator and the sinks."""
     acc = RoiAccumulator()
-    for t in range(seg.n):
-        found, state = roto_frame(seg, t)
-        _collect(acc, found, seg.work.shape, t, mask_sink)
-        if state_sink is not None:
-            state_sink(t, state)
+    images = seg.images()
+    try:
+        for t, image in images:
+            found, state = roto_frame(seg, t, image)
+            _collect(acc, found, seg.work.shape, t, mask_sink)
+            if state_sink is not None:
+                state_sink(t, state)
+    finally:
+        images.close()
     return acc
 
 
-def roto_frame(seg: RotoSegmentation, t: int
+def roto_frame(seg: RotoSegmentation, t: int, image: np.ndarray | None = None
                ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray] | None, FrameState]:
     """Frame ``t`` of a finished propagation as the ROI accumulator takes it: ``(crop, box,
     center_xy)`` of the whole mask (all its components: legs may come apart), None where the
-    subject is lost; and what the segmentation says of the frame."""
-    mask, state = seg.frame(t)
+    subject is lost; and what the segmentation says of the frame (``image``: its source frame,
+    when the caller holds it)."""
+    mask, state = seg.frame(t, image)
     if state.lost or not mask.any():
         return None, state
     x, y, w, h = cv2.boundingRect(mask.astype(np.uint8))

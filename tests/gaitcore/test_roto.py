@@ -21,7 +21,13 @@ from gaitcore.cli import main
 from gaitcore.errors import GaitInputError
 from gaitcore.io.scribbles import read_scribbles, scribbles_from_dict, write_scribbles
 from gaitcore.silhouettes.annotations import Rect, Scribble
-from gaitcore.silhouettes.propagate import Cut, disk, overlap
+from gaitcore.silhouettes.propagate import (
+    Cut,
+    PropagationSettings,
+    WorkingSize,
+    disk,
+    overlap,
+)
 from gaitcore.silhouettes.roto import RotoSegmentation
 from tests.gaitcore.test_segmentation import scene
 
@@ -376,6 +382,24 @@ def test_a_small_animal_in_a_large_frame_keeps_its_detail():
     seg.run()
     assert seg.work.scale == 1.0
     assert min(iou(seg.mask(t), big_truth[t]) for t in range(len(big))) >= 0.85
+
+
+def test_the_full_size_outline_follows_the_frames_edges_between_working_pixels():
+    """A working pixel straddling the animal's outline is taken or left whole, so a plain
+    enlargement puts the outline up to a working pixel off; with the frame it snaps to the
+    frame's edge. A slanted ellipse, worked at a quarter of its size."""
+    rng = np.random.default_rng(3)
+    animal = np.zeros((240, 320), np.uint8)
+    cv2.ellipse(animal, (161, 119), (101, 47), 17, 0, 360, 1, -1)
+    frame = np.where(animal[..., None] > 0, [60, 70, 150], [90, 170, 80]).astype(np.float32)
+    frame = np.clip(frame + rng.normal(0, 3, frame.shape), 0, 255).astype(np.uint8)
+    work = WorkingSize.for_subject(animal.shape, 800, PropagationSettings())
+    small = work.shrink_mask(animal > 0).astype(np.uint8)
+    assert work.wh == (80, 60)
+    plain, edged = work.enlarge(small), work.enlarge(small, frame)
+    wrong = [int((m != (animal > 0)).sum()) for m in (plain, edged)]
+    assert wrong[1] < 0.3 * wrong[0], wrong
+    assert np.array_equal(work.enlarge(np.zeros_like(small), frame), np.zeros(animal.shape, bool))
 
 
 @pytest.mark.parametrize("marks", [
