@@ -355,11 +355,10 @@ def guided_coefficients(guide: np.ndarray, mask: np.ndarray
     def mean(a: np.ndarray) -> np.ndarray:
         return cv2.boxFilter(a, -1, size, borderType=cv2.BORDER_REFLECT)
 
-    level = guide
-    mean_level, mean_mask = mean(level), mean(mask)
-    spread = mean(level * level) - mean_level * mean_level
-    slope = (mean(level * mask) - mean_level * mean_mask) / (spread + np.float32(EDGE_EPS))
-    return mean(slope), mean(mean_mask - slope * mean_level)
+    mean_guide, mean_mask = mean(guide), mean(mask)
+    spread = mean(guide * guide) - mean_guide * mean_guide
+    slope = (mean(guide * mask) - mean_guide * mean_mask) / (spread + np.float32(EDGE_EPS))
+    return mean(slope), mean(mean_mask - slope * mean_guide)
 
 
 @dataclass(frozen=True)
