@@ -100,7 +100,7 @@ def davis_from_box() -> Section:
     title = "DAVIS from one box, then one scripted stroke per 10 frames"
     if not (DATA / "davis-bear").is_dir():
         return Section(title, headers, [], [f"skipped: real footage not found at {DATA}"])
-    rows = [[name, *_scripted(*_davis(name))[1:]] for name in CLIPS]
+    rows = [[name, *_scripted(*_davis(name))[1]] for name in CLIPS]
     notes = ["targets (issue 11): IoU from the box >= 0.85; after the strokes >= 0.92 and legs "
              ">= 0.75, on each clip",
              "box: the reference mask's bounding box on frame 0, padded 4%; each round the "
@@ -117,16 +117,16 @@ def davis_from_box() -> Section:
     return Section(title, headers, rows, notes)
 
 
-def _scripted(source, refs) -> list:
-    """The first table's protocol on one clip: the first frame's cut, then its row's figures
+def _scripted(source, refs) -> tuple[float, list]:
+    """The first table's protocol on one clip: the IoU of the first frame's cut, and its row
     after the clip's name (frames, from the box, strokes, after them, seconds)."""
     seg = RotoSegmentation(source, box=padded_box(refs[0]))
     seg.run()
     first = iou(seg.work.enlarge(seg.keys[0].mask), refs[0])
     result = run_scripted_user(seg, refs, len(refs) // 10)
-    return [_r(first), len(refs), _r(result.ious[0].mean()), _r(result.legs[0].mean()),
-            len(result.seconds), _r(result.ious[-1].mean()), _r(result.legs[-1].mean()),
-            round(float(result.seconds.mean()), 2)]
+    return _r(first), [len(refs), _r(result.ious[0].mean()), _r(result.legs[0].mean()),
+                       len(result.seconds), _r(result.ious[-1].mean()),
+                       _r(result.legs[-1].mean()), round(float(result.seconds.mean()), 2)]
 
 
 def davis_loose_box(pads: tuple[float, ...] = (0.04, 0.1, 0.2, 0.3)) -> Section:
@@ -289,8 +289,8 @@ def more_davis() -> Section:
             "on footage the benchmark has not seen"])
     rows = []
     for root in clips:
-        first, *row = _scripted(*_davis_at(root))
-        rows.append([root.name, row[0], first, *row[1:]])
+        first, (frames, *row) = _scripted(*_davis_at(root))
+        rows.append([root.name, frames, first, *row])
     return Section(title, headers, rows, [
         f"clips: every folder under {where} with JPEGImages/ and Annotations/; box and "
         "strokes as in the first table; legs: the lower third of each frame's reference box",

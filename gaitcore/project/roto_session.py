@@ -44,6 +44,7 @@ from gaitcore.silhouettes.segmentation import (
     collect_roto,
     full_frame_mask,
     roto_frame,
+    roto_frames,
 )
 from gaitcore.silhouettes.sketch import rasterize_strokes
 from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiAccumulator
@@ -262,8 +263,8 @@ class RotoSession:
         state = self._current()
         try:
             first, stop = edit(state.engine)
-            for t in range(first, stop):
-                found, state.states[t] = roto_frame(state.engine, t)
+            for t, found, frame_state in roto_frames(state.engine, first, stop):
+                state.states[t] = frame_state
                 state.crops.replace(t, found)
         except BaseException:
             self._state = None  # half changed: the saved copy of ``project`` is the truth

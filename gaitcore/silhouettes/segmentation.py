@@ -15,7 +15,7 @@ Two methods:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field, replace
 
 import cv2
@@ -205,16 +205,25 @@ def collect_roto(seg: RotoSegmentation, mask_sink: MaskSink | None,
     """Every frame's mask of a finished propagation, all its components (legs may come
     apart), into the ROI accumulator and the sinks."""
     acc = RoiAccumulator()
-    images = seg.images()
+    for t, found, state in roto_frames(seg):
+        _collect(acc, found, seg.work.shape, t, mask_sink)
+        if state_sink is not None:
+            state_sink(t, state)
+    return acc
+
+
+def roto_frames(seg: RotoSegmentation, start: int = 0, stop: int | None = None
+                ) -> Iterator[tuple[int, tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+                                    FrameState]]:
+    """:func:`roto_frame` of frames ``start <= t < stop`` (to the end: None) in order, as
+    ``(t, found, state)``, their source frames decoded on a thread ahead
+    (:meth:`RotoSegmentation.images`)."""
+    images = seg.images(start, stop)
     try:
         for t, image in images:
-            found, state = roto_frame(seg, t, image)
-            _collect(acc, found, seg.work.shape, t, mask_sink)
-            if state_sink is not None:
-                state_sink(t, state)
+            yield (t, *roto_frame(seg, t, image))
     finally:
         images.close()
-    return acc
 
 
 def roto_frame(seg: RotoSegmentation, t: int, image: np.ndarray | None = None
