@@ -59,7 +59,8 @@ def run() -> list[Section]:
         rows.append([name, "warped mask alone (no colour)",
                      *_carried(frames, refs, box, PropagationSettings(), _warp_only)])
     notes = ["each key frame is the reference mask at the working size; its colours are learnt "
-             "as a key frame's are; scores at the source size against the reference",
+             "as a key frame's are; scores at the source size against the reference, the "
+             "outline along the frame's edges as the engine writes its masks",
              "legs: IoU inside the lower third of each frame's reference bounding box",
              "one frame on, the warped mask alone still beats colour on bear and goat: the "
              "colours of a key frame turn some of a true mask's pixels wrong at once, which is "
@@ -98,7 +99,7 @@ def _carried(frames: list[np.ndarray], refs: list[np.ndarray], box, settings: Pr
                          warp.motion)
             mask = np.zeros_like(mask)
             mask[y0:y1, x0:x1] = cut.mask
-            full = work.enlarge(mask)
+            full = work.enlarge(mask, frames[t])
             scores[:, t - key - 1] += (iou(full, refs[t]), legs_iou(full, refs[t]))
             counts[t - key - 1] += 1
     mean = scores / counts
