@@ -261,7 +261,8 @@ class RotoSegmentation:
 
     def mask(self, t: int) -> np.ndarray:
         """Frame ``t``'s silhouette at the source size, (rows, cols) bool, its outline on the
-        frame's edges (:meth:`~gaitcore.silhouettes.propagate.WorkingSize.enlarge`)."""
+        frame's edges (:meth:`~gaitcore.silhouettes.propagate.WorkingSize.enlarge`); all
+        False where the subject is lost, as the command writes it."""
         return self.frame(t)[0]
 
     def state(self, t: int) -> FrameState:
@@ -270,12 +271,14 @@ class RotoSegmentation:
 
     def frame(self, t: int, image: np.ndarray | None = None) -> tuple[np.ndarray, FrameState]:
         """:meth:`mask` and :meth:`state` of frame ``t``, its two passes blended once;
-        ``image`` is the source frame when the caller holds it (else it is read)."""
+        ``image`` is the source frame when the caller holds it (else it is read). A lost
+        frame's leftover is not outlined: its mask is empty."""
         cut = self._final(t)
-        if not cut.mask.any():
-            return np.zeros(self.work.shape, bool), self._state(t, cut)
+        state = self._state(t, cut)
+        if state.lost or not cut.mask.any():
+            return np.zeros(self.work.shape, bool), state
         image = check_frame(self.source[t] if image is None else image)
-        return self.work.enlarge(cut.mask, image), self._state(t, cut)
+        return self.work.enlarge(cut.mask, image), state
 
     def _state(self, t: int, cut: Cut) -> FrameState:
         lost = float(cut.mask.sum()) < self.s.lost_frac * self.key_area

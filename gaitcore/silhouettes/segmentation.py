@@ -233,7 +233,7 @@ def roto_frame(seg: RotoSegmentation, t: int, image: np.ndarray | None = None
     subject is lost; and what the segmentation says of the frame (``image``: its source frame,
     when the caller holds it)."""
     mask, state = seg.frame(t, image)
-    if state.lost or not mask.any():
+    if not mask.any():  # lost frames come empty
         return None, state
     x, y, w, h = cv2.boundingRect(mask.astype(np.uint8))
     crop = mask[y : y + h, x : x + w]

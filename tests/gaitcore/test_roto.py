@@ -237,6 +237,7 @@ def test_a_subject_that_leaves_the_frame_is_flagged_lost():
     seg = RotoSegmentation(frames, box=padded_box(truth[0]))
     seg.run()
     assert [seg.state(t).lost for t in range(14)] == [t >= 8 for t in range(14)]
+    assert [bool(seg.mask(t).any()) for t in range(14)] == [t < 8 for t in range(14)]
 
 
 @pytest.mark.parametrize(("data", "match"), [
