@@ -54,7 +54,8 @@ def test_muybridge_race_horse_whatever_the_user_drew(shared_data, tmp_path, draw
 def test_davis_from_one_box_and_scripted_strokes(shared_data, clip):
     """From the reference box alone, then one scripted stroke per 10 frames: the strokes must
     help, and the box alone must already find most of the animal (figures in
-    docs/benchmarks.md; the issue's targets, 0.85 and 0.92, are not all met yet)."""
+    docs/benchmarks.md; the issue's targets, 0.85 and 0.92, are not all met yet). How fast a
+    correction runs is the segmentation benchmark's to measure, not a timed assertion here."""
     from gaitcore.bench.scripted_user import padded_box, run_scripted_user
     from gaitcore.footage.image_folder import read_mask_folder
     from gaitcore.footage.sources import open_frames
@@ -67,4 +68,3 @@ def test_davis_from_one_box_and_scripted_strokes(shared_data, clip):
     run = run_scripted_user(seg, refs, len(refs) // 10)
     assert run.ious[0].mean() >= 0.7
     assert run.ious[-1].mean() >= run.ious[0].mean() + 0.01
-    assert (run.seconds <= 5.0).all()
