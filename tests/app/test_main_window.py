@@ -253,8 +253,9 @@ def test_a_long_analysis_shows_its_progress_and_cancel_stops_it(qtbot, window, m
     per_pass: list[int] = []
 
     def chunks(flat, scale):  # a long clip's PCA, made slow enough to watch
-        per_pass.append(sum(1 for _ in slow_chunks(flat, scale)))
-        for rows in slow_chunks(flat, scale):
+        blocks = list(slow_chunks(flat, scale))
+        per_pass.append(len(blocks))
+        for rows in blocks:
             time.sleep(0.05)
             taken[0] += 1
             yield rows
