@@ -35,6 +35,9 @@ from gaitcore.silhouettes.tracking import keep_overlapping
 
 _SAME_SEEDS = 0.95
 """Motion seeds overlapping earlier ones this much (IoU) would cut the same: not tried again."""
+_LEAST_SHARE = 0.05
+"""Moving pixels, or a cut, covering less of the box than this are taken to have found
+nothing in it."""
 
 
 def _grabcut(image: np.ndarray, labels: np.ndarray, iters: int) -> np.ndarray:
@@ -117,7 +120,11 @@ def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndar
         (:func:`_spans`), the one whose own colours best separate its two sides
         (:func:`_separation`) is kept. The cut with the whole box "probably subject" is kept
         when none does, or when nothing moved; with ``seed``, it competes with the seeded
-        one. (Over fifteen real first frames with motion seeds it won once, by a hair: DAVIS
+        one. When that cut found nothing (under ``_LEAST_SHARE`` of the box: the colours
+        around the box explain all those in it, as a crowd around a dancer's dress and skin
+        does), the seeded cut that separates best is kept even though it spans less of the
+        box: a part of the subject is a start the artist can correct, an empty first frame
+        loses the whole clip. (Over fifteen real first frames with motion seeds it won once, by a hair: DAVIS
         bear from frame 30, whose clip reads 0.925 without it against 0.934; and it cost one
         more GrabCut, a second of the first frame's time.)
     """
@@ -149,7 +156,11 @@ def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndar
     cuts = [mask for mask, (around, _) in zip(masks, starts) if _spans(mask, around)]
     if cuts:
         return max(cuts, key=lambda mask: _separation(small, mask, box))
-    return masks[0] if with_whole else cut(whole)
+    whole_cut = masks[0] if with_whole else cut(whole)
+    found = [mask for mask in masks if mask.sum() >= _LEAST_SHARE * w * h]
+    if whole_cut.sum() >= _LEAST_SHARE * w * h or not found:
+        return whole_cut
+    return max(found, key=lambda mask: _separation(small, mask, box))
 
 
 def _learning_window(box: Box) -> tuple[slice, slice]:
@@ -234,7 +245,8 @@ def _spans(mask: np.ndarray, box: Box, least: float = 0.6) -> bool:
 
 def _moving(residual: np.ndarray, inside: np.ndarray) -> np.ndarray | None:
     """Pixels in the box that move unlike the camera (Otsu's threshold of the residual in the
-    box, at least half a pixel); None when that is under 5% or over 90% of the box."""
+    box, at least half a pixel); None when that is under ``_LEAST_SHARE`` or over 90% of the
+    box."""
     values = residual[inside]
     top = float(values.max())
     if top <= 0.5:
@@ -243,7 +255,7 @@ def _moving(residual: np.ndarray, inside: np.ndarray) -> np.ndarray | None:
     otsu, _ = cv2.threshold(scaled, 0, 255, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
     moving = (residual > max(0.5, otsu / 255 * top)) & inside
     share = moving.sum() / max(inside.sum(), 1)
-    return moving if 0.05 <= share <= 0.9 else None
+    return moving if _LEAST_SHARE <= share <= 0.9 else None
 
 
 def cut_with_prior(small: np.ndarray, prior: np.ndarray, *, subject: np.ndarray | None = None,

@@ -711,6 +711,49 @@ def test_the_whole_box_is_cut_only_when_no_motion_seeded_cut_spans_it(monkeypatc
     assert overlap(mask, body) > 0.95
 
 
+def _crowd(patches: int) -> tuple[np.ndarray, tuple[int, int, int, int], np.ndarray]:
+    """A red body on bare legs in a box ringed by ``patches`` red and skin patches (a crowd
+    wearing the dancer's colours): the image, the box and the body."""
+    rng = np.random.default_rng(0)
+    red, skin = np.array([40, 40, 170]), np.array([140, 170, 220])
+    img = np.full((120, 160, 3), 110.0)
+    box = (50, 20, 52, 88)
+    for _ in range(patches):
+        x, y = rng.integers(0, 154), rng.integers(0, 114)
+        if not (box[0] - 6 <= x <= box[0] + box[2] and box[1] - 6 <= y <= box[1] + box[3]):
+            img[y : y + 6, x : x + 6] = red if rng.random() < 0.5 else skin
+    body = np.zeros((120, 160), np.uint8)
+    cv2.ellipse(body, (75, 50), (10, 20), 0, 0, 360, 1, -1)
+    legs = np.zeros_like(body)
+    legs[68:104, 69:72] = legs[68:104, 78:81] = 1
+    img[body > 0], img[legs > 0] = red, skin
+    return np.clip(img + rng.normal(0, 6, img.shape), 0, 255).astype(np.uint8), box, body
+
+
+def test_a_first_cut_keeps_the_part_motion_found_when_the_whole_box_finds_nothing():
+    """DAVIS dance-twirl: a crowd around the box wears the dancer's red and shows her skin,
+    so the cut from the whole box came out empty (4 pixels) and all 90 frames were lost
+    (IoU 0.000). The motion had found her dress, though not her legs: that cut, kept, lets
+    the clip read 0.825."""
+    from gaitcore.silhouettes import keyframe
+    from gaitcore.silhouettes.propagate import PropagationSettings
+
+    img, box, body = _crowd(200)
+    residual = np.where(body > 0, 3.0, 0.0).astype(np.float32)
+    settings = PropagationSettings()
+    assert keyframe._cut_labels(img, box, None, None, None, settings).sum() == 0
+    mask = keyframe.cut_first(img, box, residuals=[residual], settings=settings)
+    assert overlap(mask, body) > 0.9
+
+
+def test_a_first_cut_that_finds_nothing_in_its_box_says_so():
+    """Nothing moves and the crowd's colours explain everything in the box: the run stops
+    with one line saying what to do, rather than losing every frame."""
+    img, box, _ = _crowd(800)
+    with pytest.raises(GaitInputError, match="first frame is empty.*subject strokes"):
+        RotoSegmentation([img] * 8, box=Rect(*box)).run()
+
+
 def test_the_first_cut_does_not_hang_on_one_choice_of_motion_seeds(shared_data):
     """DAVIS dog taken every second frame: the motion over frames 2, 6 and 12 (the default
     offsets) spreads into the fence on the box's top edge, and the cut it seeds takes the
