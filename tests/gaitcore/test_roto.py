@@ -70,6 +70,26 @@ def test_a_correction_changes_only_the_frames_up_to_the_neighbouring_keys():
         assert np.array_equal(seg.mask(t), after_10[t]), t
 
 
+def test_where_one_pass_lost_the_subject_the_other_is_taken_whole():
+    """The pass from frame 0 lost the subject on the corrected frame 10, so it is taken to
+    have drifted all the way there and the pass back from 10 gets most of the frames between;
+    that pass lost it on frame 5. Mixed in, its empty mask erased the first pass's good one
+    (DAVIS breakdance's frame 8). A frame both passes lost stays lost."""
+    frames, truth = scene(14)
+    seg = RotoSegmentation(frames, box=padded_box(truth[0]))
+    seg.run()
+    seg.correct([Scribble([[60.0, 50.0]], 4, 10, "subject")])
+    empty = Cut(np.zeros(seg.fwd.shape, np.uint8), 0.0)
+    seg.fwd.put(10, empty)
+    for t in (5, 6):
+        seg.bwd.put(t, empty)
+    kept = seg.fwd.get(5).mask
+    assert seg._weight(5, 0, 10) < 0.5
+    assert np.array_equal(seg._final(5).mask, kept) and not seg.state(5).lost
+    seg.fwd.put(6, empty)
+    assert seg.state(6).lost
+
+
 def _masks(seg):
     return [seg.mask(t).copy() for t in range(seg.n)]
 
