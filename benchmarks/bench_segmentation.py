@@ -273,7 +273,7 @@ def _on_still_plate(source, refs, plate: np.ndarray) -> list[np.ndarray]:
 def more_davis() -> Section:
     """The first table's protocol on clips beyond ../shared/data: every folder under
     ``GAIT_MORE_DAVIS`` with ``JPEGImages`` and ``Annotations`` (DAVIS's layout; for instance
-    DAVIS 2016's validation clips of animals)."""
+    DAVIS 2016's twenty validation clips, animals or not)."""
     headers = ["clip", "frames", "first frame's cut", "IoU from box", "legs IoU from box",
                "strokes", "IoU after strokes", "legs IoU after strokes",
                "s per re-propagation"]
@@ -291,6 +291,11 @@ def more_davis() -> Section:
     for root in clips:
         first, (frames, *row) = _scripted(*_davis_at(root))
         rows.append([root.name, frames, first, *row])
+    if len(rows) > 1:
+        columns = list(zip(*rows))
+        rows.append(["mean of the clips", sum(columns[1]), *(_r(np.mean(c)) for c in columns[2:5]),
+                     sum(columns[5]), *(_r(np.mean(c)) for c in columns[6:8]),
+                     round(float(np.mean(columns[8])), 2)])
     return Section(title, headers, rows, [
         f"clips: every folder under {where} with JPEGImages/ and Annotations/; box and "
         "strokes as in the first table; legs: the lower third of each frame's reference box",
