@@ -372,7 +372,7 @@ class RotoSegmentation:
             raise GaitInputError(
                 "the cut-out on the first frame is empty: nothing in the box stood out from "
                 "what lies around it: draw the box closer around the animal, or paint subject "
-                "strokes on it on the first frame")
+                "strokes over the animal on the first frame")
 
     def _first_cut_here(self, frame: np.ndarray) -> np.ndarray:
         small = self.work.shrink(frame)
