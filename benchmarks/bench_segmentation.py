@@ -83,7 +83,8 @@ LONG_FRAMES, LONG_W, LONG_H = 10_000, 640, 480
 def run() -> list[Section]:
     """All sections of this benchmark (real-footage rows are skipped when it is absent)."""
     return [davis_from_box(), davis_loose_box(), davis_later_start(), davis_exposure(),
-            still_camera(), more_davis(), paper_rectangles(), muybridge_usable(), speed(), long_clip_memory()]
+            still_camera(), more_davis(), paper_rectangles(), muybridge_usable(), speed(),
+            long_clip_memory()]
 
 
 def _davis(name: str):

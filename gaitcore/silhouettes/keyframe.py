@@ -120,13 +120,13 @@ def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndar
         (:func:`_spans`), the one whose own colours best separate its two sides
         (:func:`_separation`) is kept. The cut with the whole box "probably subject" is kept
         when none does, or when nothing moved; with ``seed``, it competes with the seeded
-        one. When that cut found nothing (under ``_LEAST_SHARE`` of the box: the colours
-        around the box explain all those in it, as a crowd around a dancer's dress and skin
-        does), the seeded cut that separates best is kept even though it spans less of the
-        box: a part of the subject is a start the artist can correct, an empty first frame
-        loses the whole clip. (Over fifteen real first frames with motion seeds it won once, by a hair: DAVIS
+        one. (Over fifteen real first frames with motion seeds it won once, by a hair: DAVIS
         bear from frame 30, whose clip reads 0.925 without it against 0.934; and it cost one
-        more GrabCut, a second of the first frame's time.)
+        more GrabCut, a second of the first frame's time.) When the whole box's cut found
+        nothing (under ``_LEAST_SHARE`` of the box: the colours around the box explain all
+        those in it, as a crowd around a dancer's dress and skin does), the seeded cut that
+        separates best is kept even though it spans less of the box: a part of the subject
+        is a start the artist can correct, an empty first frame loses the whole clip.
     """
     if box is None:
         return _cut_labels(small, None, None, subject, background, settings)
