@@ -157,10 +157,9 @@ def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndar
     if cuts:
         return max(cuts, key=lambda mask: _separation(small, mask, box))
     whole_cut = masks[0] if with_whole else cut(whole)
-    found = [mask for mask in masks if mask.sum() >= _LEAST_SHARE * w * h]
-    if whole_cut.sum() >= _LEAST_SHARE * w * h or not found:
-        return whole_cut
-    return max(found, key=lambda mask: _separation(small, mask, box))
+    least = _LEAST_SHARE * w * h
+    found = [] if whole_cut.sum() >= least else [mask for mask in masks if mask.sum() >= least]
+    return max(found, key=lambda mask: _separation(small, mask, box)) if found else whole_cut
 
 
 def _learning_window(box: Box) -> tuple[slice, slice]:

@@ -363,12 +363,15 @@ class RotoSegmentation:
             return
         x, y, w, h = self.work.box(self.box.as_tuple())
         inside = mask[y : y + h, x : x + w]
-        if inside.size and inside.mean() > FILLED_BOX:
+        if not inside.size:
+            return
+        share = float(inside.mean())
+        if share > FILLED_BOX:
             raise GaitInputError(
                 "the cut-out on the first frame fills the whole box, so nothing told the "
                 "animal from the background: draw the box closer around the animal, or paint "
                 "background strokes on the first frame")
-        if inside.size and inside.mean() < EMPTY_BOX:
+        if share < EMPTY_BOX:
             raise GaitInputError(
                 "the cut-out on the first frame is empty: nothing in the box stood out from "
                 "what lies around it: draw the box closer around the animal, or paint subject "
@@ -634,8 +637,9 @@ class RotoSegmentation:
         g = None if key_frames_only or b >= self.n else self.bwd.get(t)
         if f is None or g is None:
             return f or g or Cut(np.zeros(self.fwd.shape, np.uint8), 0.0)
-        if self._lost(f.mask) != self._lost(g.mask):
-            return g if self._lost(f.mask) else f
+        f_lost, g_lost = self._lost(f.mask), self._lost(g.mask)
+        if f_lost != g_lost:
+            return g if f_lost else f
         w = self._weight(t, a, b)
         soft = (w * cv2.GaussianBlur(f.mask.astype(np.float32), (0, 0), 1.5)
                 + (1 - w) * cv2.GaussianBlur(g.mask.astype(np.float32), (0, 0), 1.5))
