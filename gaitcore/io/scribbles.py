@@ -5,7 +5,8 @@ Scribbles: ``{"scribbles": [{"frame": 12, "label": "subject", "width": 8,
 "points": [[x, y], ...]}, ...]}`` with ``label`` "subject" or "background", points in source
 pixels, 0-based frames. ``segmentation.json``: ``{"format": "gaitstudio-segmentation",
 "n_frames": n, "frames": [{"frame": 0, "lost": false, "corrected": false,
-"confidence": 1.0}, ...]}``. Both are plain JSON, written atomically.
+"confidence": 1.0}, ...]}`` (confidence: see
+:class:`~gaitcore.silhouettes.roto.FrameState`). Both are plain JSON, written atomically.
 """
 
 from __future__ import annotations

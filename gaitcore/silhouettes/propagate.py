@@ -370,8 +370,9 @@ class Cut:
     mask : ndarray of shape (rows, cols), uint8
         0/1 silhouette at the working size.
     confidence : float
-        Agreement of the cut with its prior (intersection over union), 1 on key frames; 0 when
-        the cut was refused and the warped prior kept.
+        How far the mask stands out from its surroundings under its key's colours, as a share
+        of how far the key's own mask did (:func:`fuse_cut`), in [0, 1]; 1 on key frames, 0
+        when the cut was refused and the warped prior kept.
     """
 
     mask: np.ndarray
@@ -1086,9 +1087,15 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
     Returns
     -------
     Cut
-        The kept warped mask (confidence 0) when the result's area jumped (flood, collapse);
-        an empty mask when the warped mask's pixels mostly do not look like the subject
-        (it has left, or is hidden), or when the mask no longer stands out from its
+        The cut, its confidence how far it stands out from its surroundings under
+        ``colours``, over ``colours.gap`` (at most 1). Over 21 DAVIS clips cut from a box,
+        this ranks a clip's frames by their IoU with the reference at a Spearman
+        correlation of 0.32 on average (0.44 on the eight animals); the cut's overlap with
+        its prior, the confidence before, ranked them at 0.10 (0.00).
+
+        The kept warped mask (confidence 0) when the result's area jumped (flood,
+        collapse); an empty mask when the warped mask's pixels mostly do not look like the
+        subject (it has left, or is hidden), or when the mask no longer stands out from its
         surroundings under the key's colours ``lost_gap`` as well as ``gap`` says (it slid
         onto the background).
 
@@ -1131,11 +1138,14 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
     # its surroundings (it slid onto them).
     gone = area < settings.max_shrink * prior_area and np.median(evidence[inside > 0]) < 0
     if not gone:
-        cut = (Cut(mask, overlap(mask, inside))
-               if settings.max_shrink * prior_area <= area <= settings.max_growth * prior_area
-               else Cut(inside, 0.0))
+        kept = settings.max_shrink * prior_area <= area <= settings.max_growth * prior_area
+        cut = Cut(mask if kept else inside, 0.0)
+        shows = colour_gap(ratios, cut.mask > 0)
         reference = colours.gap if gap is None else gap
-        gone = reference > 0 and colour_gap(ratios, cut.mask > 0) < settings.lost_gap * reference
+        gone = reference > 0 and shows < settings.lost_gap * reference
+        if kept:
+            cut = Cut(mask, (float(np.clip(shows / colours.gap, 0.0, 1.0)) if colours.gap > 0
+                             else overlap(mask, inside)))
     return Cut(np.zeros_like(inside), 0.0) if gone else cut
 
 

@@ -87,9 +87,11 @@ class FrameState:
     corrected : bool
         The frame carries the artist's strokes.
     confidence : float
-        In [0, 1]: how well the graph cut agreed with the mask carried by optical flow (1 on
-        key frames, 0 where a cut was refused as a flood or a collapse); where both passes
-        reach a frame, theirs weighted as their masks are blended.
+        In [0, 1]: how far the mask stands out from its surroundings under its key frame's
+        colours, as a share of how far the key's own mask did (1 on key frames, 0 where a
+        cut was refused as a flood or a collapse; see :func:`fuse_cut`); where both passes
+        reach a frame, theirs weighted as their masks are blended. The lower, the more the
+        frame is worth a look.
     """
 
     lost: bool

@@ -592,6 +592,36 @@ def test_a_mask_that_no_longer_stands_out_from_its_surroundings_is_lost():
     assert overlap(fuse_cut(darker, prior, trusted, colours, settings).mask, body) > 0.9
 
 
+def test_confidence_falls_as_the_subject_stands_out_less_though_the_cut_holds_it():
+    """A brown body on green grass taught the colours. On later frames the flow carries its
+    shape exactly, but the body has faded towards the grass (a shadow, haze, motion blur):
+    the cut still holds the whole body, so its agreement with the carried mask (the
+    confidence before) read 1 on each; how far the mask stands out under the key's colours
+    falls, and so does the confidence, which tells the artist which frames to look at."""
+    from gaitcore.silhouettes.colour_model import learn_colours
+    from gaitcore.silhouettes.propagate import PropagationSettings, fuse_cut
+
+    rng = np.random.default_rng(7)
+    green, brown = np.array([60, 140, 70]), np.array([40, 80, 160])
+    body = np.zeros((120, 160), np.uint8)
+    cv2.ellipse(body, (80, 60), (45, 22), 0, 0, 360, 1, -1)
+
+    def frame(faded: float) -> np.ndarray:
+        image = np.clip(rng.normal(green, 8, (120, 160, 3)), 0, 255).astype(np.uint8)
+        colour = (1 - faded) * brown + faded * green
+        image[body > 0] = np.clip(rng.normal(colour, 8, (int(body.sum()), 3)), 0, 255)
+        return image
+
+    colours = learn_colours(frame(0.0), body)
+    prior = cv2.GaussianBlur(body.astype(np.float32), (0, 0), 1.0)
+    cuts = [fuse_cut(frame(faded), prior, np.ones_like(prior), colours, PropagationSettings())
+            for faded in (0.0, 0.3, 0.42)]
+    assert all(overlap(cut.mask, body) > 0.99 for cut in cuts)
+    confidence = [cut.confidence for cut in cuts]
+    assert confidence[0] > 0.99 and confidence[2] < 0.95
+    assert confidence == sorted(confidence, reverse=True)
+
+
 def test_a_subject_found_again_is_not_lost_again_by_the_gap_it_was_found_with():
     """From frame 3, bands of the subject's brown cover the ground above and below it: its
     mask stands out from its surroundings far less than on the key frame, and frame 3 is
