@@ -93,6 +93,7 @@ class MainWindow(QMainWindow):
         self._build_views()
         self._build_docks()
         self.tools = ToolsController(self.state, self.frame_view, self.documents, self)
+        self.timeline.frames_to_check = self.tools.roto.frames_to_check
         self.addToolBar(self.tools.toolbar)
         self._build_menus()
 
@@ -199,6 +200,7 @@ class MainWindow(QMainWindow):
         self._action(play, "Previous frame", Qt.Key.Key_Left, lambda: self.player.step(-1))
         self._action(play, "First frame", Qt.Key.Key_Home, lambda: self.player.go_to(0))
         self._action(play, "Last frame", Qt.Key.Key_End, lambda: self.player.go_to(-1))
+        self._action(play, "Next frame to chec&k", Qt.Key.Key_K, self._next_to_check)
         play.addSeparator()
         self._action(play, "Set &in mark", Qt.Key.Key_I, lambda: set_in_mark(self.state))
         self._action(play, "Set &out mark", Qt.Key.Key_O, lambda: set_out_mark(self.state))
@@ -344,6 +346,19 @@ class MainWindow(QMainWindow):
             painter.drawImage(rect, self.viewport.gl_view.render_image())
             painter.end()
         return pixmap
+
+    def _next_to_check(self) -> None:
+        """Go to the next frame the segmentation says is worth a look (lost, or of a low
+        confidence, and not corrected), after the current one and round to the start."""
+        frames = self.tools.roto.frames_to_check()
+        if not frames:
+            self._show_message("no frame to check: segment the clip first, or every frame "
+                               "stands out as well as its key frame")
+            return
+        later = [f for f in frames if f > self.state.frame]
+        self.player.go_to(later[0] if later else frames[0])
+        self._show_message(f"frame {self.state.frame}: {len(frames)} frames to check "
+                           "(faint red on the timeline)")
 
     def _ask_frame_rate(self) -> None:
         fps = self.asker.frame_rate(self.state.fps)

@@ -54,6 +54,7 @@ class RotoController(QObject):
         self._view = view
         self._documents = documents
         self._session: RotoSession | None = None
+        self._checked: tuple[object, tuple[int, ...]] = (None, ())
         self._running: Job | None = None
         self._pending: list[Scribble] = []
         self._landed = False
@@ -77,10 +78,23 @@ class RotoController(QObject):
         """The engine of the last segmentation or correction (None before one)."""
         return self._session
 
+    def frames_to_check(self) -> tuple[int, ...]:
+        """The frames of the project's segmentation worth a look (lost, or of a low
+        confidence, and not corrected: :meth:`RotoSession.to_check`), for the timeline; none
+        before a segmentation or a correction in this session of the app. While a job
+        changes the engine, those of the project it started from."""
+        if self._session is None:
+            return ()
+        project = self._state.project
+        if (self._running is None or self._landed) and self._checked[0] is not project:
+            self._checked = (project, self._session.to_check(project))
+        return self._checked[1]
+
     def _forget(self, *_opened) -> None:
         """A project was opened: its engine, if saved with it, is put back by the first
         correction (in its job), never before."""
         self._session, self._pending, self._preview_key = None, [], None
+        self._checked = (None, ())
         self._opened_from = self._state.path
         self._view.set_pending(())
         self._view.set_preview(None)
@@ -197,7 +211,7 @@ class RotoController(QObject):
 
         def land(result) -> None:
             session, silhouettes = result
-            self._session, self._landed = session, True
+            self._session, self._landed, self._checked = session, True, (None, ())
             if segmentation_key(self._state.project) != key:
                 self._documents.messageRaised.emit(
                     "the project changed while segmenting: the result was dropped, try again")

@@ -3,7 +3,8 @@
 Clicking or dragging moves the current frame. Marks: key-images (orange triangles above the
 track; the selected key outlined in red), proposed alternates (cyan outlines), accepted alternates (cyan triangles), pinned
 keys (a dot), dropped keys (a grey cross), lost frames (red ticks: the segmentation lost the
-subject there), frames corrected with the subject or background brush (violet bars across the
+subject there), frames to check (faint red ticks: the segmentation's confidence is low there,
+:attr:`~gaitcore.silhouettes.roto.FrameState.to_check`), frames corrected with the subject or background brush (violet bars across the
 track, with a violet diamond under it), sketched frames (yellow ticks under the track).
 
 The trim (the in and out marks, set with I and O) darkens the frames outside it and has a
@@ -13,6 +14,8 @@ trim to it.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable, Sequence
 
 from PySide6.QtCore import QPointF, QRectF, QSize, Qt
 from PySide6.QtGui import QColor, QPainter, QPen, QPolygonF
@@ -24,6 +27,7 @@ from app.state import AppState
 KEY_COLOUR = QColor(255, 140, 0)
 ALTERNATE_COLOUR = QColor(0, 170, 220)
 LOST_COLOUR = QColor(220, 30, 30)
+CHECK_COLOUR = QColor(220, 30, 30, 110)
 SKETCH_COLOUR = QColor(230, 190, 0)
 CORRECTED_COLOUR = QColor(175, 110, 255)
 CURSOR_COLOUR = QColor(200, 0, 0)
@@ -44,6 +48,8 @@ class TimelineWidget(QWidget):
         self._state = state
         self.setMinimumHeight(76)
         self._drag: tuple[str, int] | None = None  # ("in" or "out", frame) while dragging
+        self.frames_to_check: Callable[[], Sequence[int]] = tuple
+        """The frames the segmentation says are worth a look (set by the main window)."""
         self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Fixed)
         self.setFocusPolicy(Qt.FocusPolicy.NoFocus)
         self.setToolTip("Click or drag to move through the clip")
@@ -198,6 +204,8 @@ class TimelineWidget(QWidget):
         if not lost and project.silhouettes is not None:
             lost = [int(f) for f in project.silhouettes.roi.lost.nonzero()[0]]
         width = max(2.0, track.width() / n)
+        for f in self.frames_to_check():
+            p.fillRect(QRectF(self.x_of(f) - width / 2, track.top(), width, track.height()), CHECK_COLOUR)
         for f in lost:
             p.fillRect(QRectF(self.x_of(f) - width / 2, track.top(), width, track.height()), LOST_COLOUR)
         for f in project.sketched_frames():

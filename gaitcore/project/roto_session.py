@@ -155,8 +155,7 @@ class RotoSession:
 
     def matches(self, project: Project) -> bool:
         """True when the session holds (or kept) the segmentation of ``project``'s inputs."""
-        key = segmentation_key(project)
-        return (self._state is not None and self._state.key == key) or key in self._saved
+        return self._matching(project) is not None
 
     def silhouettes(self) -> Silhouettes:
         """The project's silhouettes from the crops of every frame (cheap: no frame is decoded
@@ -177,10 +176,23 @@ class RotoSession:
     def state_for(self, project: Project) -> RotoState | None:
         """The engine's state for ``project`` (current or kept for undo) as plain data, to
         save; None when the session holds none."""
-        key = segmentation_key(project)
-        state = self._state if self._state is not None and self._state.key == key else \
-            self._saved.get(key)
+        state = self._matching(project)
         return None if state is None else roto_state(state.engine)
+
+    def to_check(self, project: Project) -> tuple[int, ...]:
+        """The frames of ``project``'s segmentation worth the artist's look
+        (:attr:`FrameState.to_check`: lost, or of a low confidence, and not corrected); none
+        when the session holds no segmentation of its inputs."""
+        state = self._matching(project)
+        return () if state is None else tuple(t for t, st in enumerate(state.states)
+                                              if st.to_check)
+
+    def _matching(self, project: Project) -> _EngineState | None:
+        """The state (current or kept for undo) of ``project``'s inputs, or None."""
+        key = segmentation_key(project)
+        if self._state is not None and self._state.key == key:
+            return self._state
+        return self._saved.get(key)
 
     def mask(self, t: int) -> np.ndarray:
         """Frame ``t``'s full-frame mask as the command writes it, (rows, cols) uint8 0/255:

@@ -310,3 +310,45 @@ def test_real_footage_from_brush_strokes_alone_keeps_the_legs(qtbot, window, sha
     window.state.set_frame(5)
     qtbot.waitUntil(lambda: window.frame_view.shown_frame == 5)
     _screenshot_of_the_footage(qtbot, window, artifacts_dir / "app_real_footage_from_strokes.png")
+
+
+def test_the_timeline_marks_the_frames_to_check_and_k_goes_to_them(qtbot, window, tmp_path,
+                                                                    artifacts_dir):
+    """A body that fades in a shade on frames 5-7 (see ``shaded_scene``): after segmenting,
+    the timeline shows frame 5 (kept, at a low confidence) faint red and the lost frames 6
+    and 7 red; K goes from frame 0 to 5, then 6; a subject stroke on frame 6 takes it off."""
+    from PySide6.QtGui import QAction, QKeySequence
+
+    from app.widgets.timeline import CHECK_COLOUR, LOST_COLOUR
+    from tests.gaitcore.test_roto_session import shaded_scene
+
+    box = shaded_scene(tmp_path / "shade")
+    window.open_path(tmp_path / "shade")
+    wait_ready(qtbot, window)
+    choose_tool(window, Tool.BOX)
+    drag(qtbot, window, [(box.x, box.y), (box.x + box.w // 2, box.y + box.h // 2),
+                         (box.x + box.w, box.y + box.h)])
+    job = window.tools.segment()
+    with qtbot.waitSignal(job.succeeded, timeout=60_000):
+        pass
+    wait_ready(qtbot, window)
+    timeline = window.timeline
+    assert timeline.frames_to_check() == (5, 6, 7, 8)
+    window.state.set_frame(0)
+    shot = timeline.grab().toImage()
+    shot.save(str(artifacts_dir / "app_timeline_to_check.png"))
+    y = round(timeline._track().center().y())
+    colour = {f: shot.pixelColor(round(timeline.x_of(f)), y) for f in (3, 5, 6, 10)}
+    assert colour[6].name() == LOST_COLOUR.name()
+    assert colour[3] == colour[10] and colour[3].red() == colour[3].green()  # the bare track
+    faint = colour[5]
+    assert faint.red() > faint.green() + 40 and faint.name() != LOST_COLOUR.name()
+    assert CHECK_COLOUR.alpha() < 255
+    (go,) = [a for a in window.findChildren(QAction) if a.shortcut() == QKeySequence("K")]
+    go.trigger()
+    assert window.state.frame == 5
+    go.trigger()
+    assert window.state.frame == 6
+    _paint(qtbot, window, Tool.SUBJECT_BRUSH, 6, [(62, 60), (70, 60), (78, 60)])
+    assert window.state.project.corrected_frames() == (6,)
+    assert 6 not in timeline.frames_to_check()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import cv2
 import numpy as np
@@ -56,6 +57,45 @@ def test_a_correction_changes_only_its_range_and_undo_finds_the_older_state(scen
         fresh = RotoSession.start(source, project.with_scribbles((other,))).silhouettes()
         assert again == fresh
         assert not session.states()[WRONG.frame].corrected
+
+
+def shaded_scene(folder):
+    """A brown body crossing green grass, 12 frames of 160x120 written to ``folder``: on
+    frames 5-7 it walks through a shade that fades it half-way to the grass. Frame 5 is kept
+    at a low confidence, 6 and 7 are lost, 8 is where it is found again. Returns the box of
+    frame 0."""
+    rng = np.random.default_rng(11)
+    green, brown = np.array([60, 140, 70]), np.array([40, 80, 160])
+    folder.mkdir(parents=True, exist_ok=True)
+    for t in range(12):
+        image = np.clip(rng.normal(green, 8, (120, 160, 3)), 0, 255).astype(np.uint8)
+        body = np.zeros((120, 160), np.uint8)
+        cv2.ellipse(body, (50 + 3 * t, 60), (30, 16), 0, 0, 360, 1, -1)
+        shade = 0.55 if 5 <= t <= 7 else 0.0
+        colour = (1 - shade) * brown + shade * green
+        image[body > 0] = np.clip(rng.normal(colour, 8, (int(body.sum()), 3)), 0, 255)
+        cv2.imwrite(str(folder / f"{t:05d}.png"), image)
+    return Rect(14, 38, 72, 44)
+
+
+def test_the_frames_to_check_are_the_lost_and_the_doubtful_not_the_corrected(tmp_path):
+    from gaitcore.silhouettes.roto import DOUBTFUL_BELOW
+
+    folder = tmp_path / "shade"
+    project = Project(footage=folder, box=shaded_scene(folder))
+    with open_frames(folder) as source:
+        session = RotoSession.start(source, project)
+        states = session.states()
+        assert session.to_check(project) == (5, 6, 7, 8)
+        assert not states[5].lost and states[5].confidence < DOUBTFUL_BELOW
+        assert states[6].lost and states[7].lost and not states[8].lost
+        assert min(st.confidence for t, st in enumerate(states) if t not in (5, 6, 7, 8)) > 0.9
+        fix = Scribble([[55.0, 60.0], [75.0, 60.0]], 6, 6, "subject")
+        session.correct(project, [fix])
+        fixed = project.with_scribbles((fix,))
+        assert 6 not in session.to_check(fixed) and session.states()[6].corrected
+        assert 6 in session.to_check(project)  # the state before, kept for undo
+        assert session.to_check(replace(project, box=Rect(10, 30, 80, 50))) == ()
 
 
 def test_cancelled_correction_leaves_the_session_usable(scene_images):
