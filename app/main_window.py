@@ -350,10 +350,14 @@ class MainWindow(QMainWindow):
     def _next_to_check(self) -> None:
         """Go to the next frame the segmentation says is worth a look (lost, or of a low
         confidence, and not corrected), after the current one and round to the start."""
-        frames = self.tools.roto.frames_to_check()
+        roto = self.tools.roto
+        frames = roto.frames_to_check()
         if not frames:
-            self._show_message("no frame to check: segment the clip first, or every frame "
-                               "stands out as well as its key frame")
+            self._show_message(
+                "no frame to check: every frame stands out about as well as its key frame"
+                if roto.session is not None else
+                "no frames to check yet: they are marked when the clip is segmented or "
+                "corrected")
             return
         later = [f for f in frames if f > self.state.frame]
         self.player.go_to(later[0] if later else frames[0])

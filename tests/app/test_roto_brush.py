@@ -325,6 +325,9 @@ def test_the_timeline_marks_the_frames_to_check_and_k_goes_to_them(qtbot, window
     box = shaded_scene(tmp_path / "shade")
     window.open_path(tmp_path / "shade")
     wait_ready(qtbot, window)
+    (go,) = [a for a in window.findChildren(QAction) if a.shortcut() == QKeySequence("K")]
+    go.trigger()  # nothing segmented yet: says so, stays
+    assert window.state.frame == 0 and "yet" in window.statusBar().currentMessage()
     choose_tool(window, Tool.BOX)
     drag(qtbot, window, [(box.x, box.y), (box.x + box.w // 2, box.y + box.h // 2),
                          (box.x + box.w, box.y + box.h)])
@@ -344,11 +347,10 @@ def test_the_timeline_marks_the_frames_to_check_and_k_goes_to_them(qtbot, window
     faint = colour[5]
     assert faint.red() > faint.green() + 40 and faint.name() != LOST_COLOUR.name()
     assert CHECK_COLOUR.alpha() < 255
-    (go,) = [a for a in window.findChildren(QAction) if a.shortcut() == QKeySequence("K")]
     go.trigger()
     assert window.state.frame == 5
     go.trigger()
-    assert window.state.frame == 6
+    assert window.state.frame == 6 and "4 frames to check" in window.statusBar().currentMessage()
     _paint(qtbot, window, Tool.SUBJECT_BRUSH, 6, [(62, 60), (70, 60), (78, 60)])
     assert window.state.project.corrected_frames() == (6,)
     assert 6 not in timeline.frames_to_check()
