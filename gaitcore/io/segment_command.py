@@ -79,10 +79,22 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
+def _spans(frames: list[int]) -> str:
+    """Sorted frame numbers as runs: ``[3, 4, 5, 9]`` -> ``"3-5, 9"``."""
+    runs: list[list[int]] = []
+    for t in frames:
+        if runs and t == runs[-1][1] + 1:
+            runs[-1][1] = t
+        else:
+            runs.append([t, t])
+    return ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs)
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``gaitcore segment``; returns the exit status."""
     from gaitcore.io.scribbles import write_segmentation_json
     from gaitcore.silhouettes.extract import is_mask_folder, load_silhouettes
+    from gaitcore.silhouettes.roto import DOUBTFUL_BELOW
     from gaitcore.silhouettes.tracking import WORK_SIDE_PX
 
     if Path(args.input).is_dir() and is_mask_folder(Path(args.input)):
@@ -96,6 +108,11 @@ def run(args: argparse.Namespace) -> int:
     lost = int(roi.lost.sum())
     corrected = sum(st.corrected for st in ordered)
     print(f"frames: {len(roi.lost)} (subject lost in {lost} of them, corrected {corrected})")
+    if ordered:
+        check = [t for t, st in enumerate(ordered) if st.to_check]
+        print(f"frames to check: {_spans(check) if check else 'none'} (lost, or of a "
+              f"confidence under {DOUBTFUL_BELOW} in segmentation.json; correct them with "
+              "--scribbles)")
     print(f"wrote {args.out / 'masks'}" + (f" and {args.out / 'segmentation.json'}"
                                            if ordered else ""))
     return 0

@@ -307,6 +307,18 @@ def test_segment_command_writes_masks_and_states(tmp_path, capsys):
     assert data["n_frames"] == 8
     assert [f["corrected"] for f in data["frames"]] == [t == 5 for t in range(8)]
     assert all(0 <= f["confidence"] <= 1 and f["lost"] is False for f in data["frames"])
+    assert "frames to check: none" in capsys.readouterr().out
+
+
+def test_segment_command_names_the_frames_to_check(tmp_path, capsys):
+    from tests.gaitcore.test_roto_session import shaded_scene
+
+    b = shaded_scene(tmp_path / "shade")
+    assert main(["segment", str(tmp_path / "shade"), "--out", str(tmp_path / "out"), "--box",
+                 f"{b.x},{b.y},{b.w},{b.h}"]) == 0
+    assert "frames to check: 5-8 (" in capsys.readouterr().out
+    frames = json.loads((tmp_path / "out" / "segmentation.json").read_text())["frames"]
+    assert [f["frame"] for f in frames if f["lost"] or f["confidence"] < 0.8] == [5, 6, 7, 8]
 
 
 def test_segment_command_starts_without_scipy(tmp_path):
