@@ -217,6 +217,10 @@ class RotoController(QObject):
                     "the project changed while segmenting: the result was dropped, try again")
                 return
             push(silhouettes)
+            if check := self.frames_to_check():
+                self._documents.messageRaised.emit(
+                    f"{len(check)} frames to check (faint red on the timeline): K goes to the "
+                    "next")
 
         self._running, self._landed = job, False
         job.finished.connect(self._finished)

@@ -334,6 +334,7 @@ def test_the_timeline_marks_the_frames_to_check_and_k_goes_to_them(qtbot, window
     job = window.tools.segment()
     with qtbot.waitSignal(job.succeeded, timeout=60_000):
         pass
+    assert "4 frames to check" in window.statusBar().currentMessage()
     wait_ready(qtbot, window)
     timeline = window.timeline
     assert timeline.frames_to_check() == (5, 6, 7, 8)
