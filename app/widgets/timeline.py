@@ -1,11 +1,12 @@
 """The timeline scrubber: one row of frames with marks for keys, alternates and lost frames.
 
 Clicking or dragging moves the current frame. Marks: key-images (orange triangles above the
-track; the selected key outlined in red), proposed alternates (cyan outlines), accepted alternates (cyan triangles), pinned
-keys (a dot), dropped keys (a grey cross), lost frames (red ticks: the segmentation lost the
-subject there), frames to check (faint red ticks: the segmentation's confidence is low there,
-:attr:`~gaitcore.silhouettes.roto.FrameState.to_check`), frames corrected with the subject or background brush (violet bars across the
-track, with a violet diamond under it), sketched frames (yellow ticks under the track).
+track; the selected key outlined in red), proposed alternates (cyan outlines), accepted
+alternates (cyan triangles), pinned keys (a dot), dropped keys (a grey cross), lost frames (red
+ticks: the segmentation lost the subject there), frames to check (faint red ticks: the
+segmentation's confidence is low there, :attr:`~gaitcore.silhouettes.roto.FrameState.to_check`),
+frames corrected with the subject or background brush (violet bars across the track, with a
+violet diamond under it), sketched frames (yellow ticks under the track).
 
 The trim (the in and out marks, set with I and O) darkens the frames outside it and has a
 handle at each end that can be dragged (one undo step per drag). Under the track, green bars
@@ -205,7 +206,8 @@ class TimelineWidget(QWidget):
             lost = [int(f) for f in project.silhouettes.roi.lost.nonzero()[0]]
         width = max(2.0, track.width() / n)
         for f in self.frames_to_check():
-            p.fillRect(QRectF(self.x_of(f) - width / 2, track.top(), width, track.height()), CHECK_COLOUR)
+            p.fillRect(QRectF(self.x_of(f) - width / 2, track.top(), width, track.height()),
+                       CHECK_COLOUR)
         for f in lost:
             p.fillRect(QRectF(self.x_of(f) - width / 2, track.top(), width, track.height()), LOST_COLOUR)
         for f in project.sketched_frames():
