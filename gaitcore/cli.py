@@ -139,6 +139,9 @@ def _run_analyze(args: argparse.Namespace) -> int:
         start, stop = analysis.frame_range
         print(f"frames: {analysis.n_frames}, {start} to {stop - 1} "
               f"(subject lost in {len(analysis.lost_frames)} of them)")
+        if states:
+            segment_command.print_frames_to_check([states[t] for t in sorted(states)],
+                                                  first_frame=args.start)
         print("variance: " + " ".join(f"{100 * v:.1f}%" for v in analysis.pca.variance_ratio))
         print("r per PC: " + " ".join(f"{r:.2f}" for r in d.correlations))
         print(f"period: {d.period_frames:.1f} frames; verdict: {d.verdict.value}: {d.reason}")

@@ -10,10 +10,15 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from gaitcore.errors import GaitInputError
 from gaitcore.silhouettes.annotations import Rect
+
+if TYPE_CHECKING:
+    from gaitcore.silhouettes.roto import FrameState
 
 MAX_PIXELS = 1 << 20
 """Largest coordinate a rectangle may have, in pixels."""
@@ -90,11 +95,20 @@ def _spans(frames: list[int]) -> str:
     return ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs)
 
 
+def print_frames_to_check(states: Sequence[FrameState], first_frame: int = 0) -> None:
+    """One line naming the frames worth a look (:attr:`FrameState.to_check`) as source frame
+    numbers, ``states[i]`` being of frame ``first_frame + i``."""
+    from gaitcore.silhouettes.roto import DOUBTFUL_BELOW
+
+    check = [first_frame + t for t, st in enumerate(states) if st.to_check]
+    print(f"frames to check: {_spans(check) if check else 'none'} (lost, or of a confidence "
+          f"under {DOUBTFUL_BELOW} in segmentation.json; correct them with --scribbles)")
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``gaitcore segment``; returns the exit status."""
     from gaitcore.io.scribbles import write_segmentation_json
     from gaitcore.silhouettes.extract import is_mask_folder, load_silhouettes
-    from gaitcore.silhouettes.roto import DOUBTFUL_BELOW
     from gaitcore.silhouettes.tracking import WORK_SIDE_PX
 
     if Path(args.input).is_dir() and is_mask_folder(Path(args.input)):
@@ -109,10 +123,7 @@ def run(args: argparse.Namespace) -> int:
     corrected = sum(st.corrected for st in ordered)
     print(f"frames: {len(roi.lost)} (subject lost in {lost} of them, corrected {corrected})")
     if ordered:
-        check = [t for t, st in enumerate(ordered) if st.to_check]
-        print(f"frames to check: {_spans(check) if check else 'none'} (lost, or of a "
-              f"confidence under {DOUBTFUL_BELOW} in segmentation.json; correct them with "
-              "--scribbles)")
+        print_frames_to_check(ordered)
     print(f"wrote {args.out / 'masks'}" + (f" and {args.out / 'segmentation.json'}"
                                            if ordered else ""))
     return 0

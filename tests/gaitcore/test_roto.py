@@ -319,6 +319,9 @@ def test_segment_command_names_the_frames_to_check(tmp_path, capsys):
     assert "frames to check: 5-8 (" in capsys.readouterr().out
     frames = json.loads((tmp_path / "out" / "segmentation.json").read_text())["frames"]
     assert [f["frame"] for f in frames if f["lost"] or f["confidence"] < 0.8] == [5, 6, 7, 8]
+    assert main(["analyze", str(tmp_path / "shade"), "--out", str(tmp_path / "an"), "--box",
+                 f"{b.x},{b.y},{b.w},{b.h}", "--start", "2"]) == 0
+    assert "frames to check: 5-8 (" in capsys.readouterr().out  # source frame numbers
 
 
 def test_segment_command_starts_without_scipy(tmp_path):
