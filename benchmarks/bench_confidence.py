@@ -14,14 +14,13 @@ Run ``python -m benchmarks confidence`` to print the table and record it.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
 from scipy.stats import spearmanr
 
 from benchmarks import Section
-from benchmarks.bench_segmentation import CLIPS, DATA, _davis_at, _r
+from benchmarks.bench_segmentation import CLIPS, DATA, _davis_at, _r, more_clips
 from gaitcore.bench.scripted_user import iou, padded_box
 from gaitcore.silhouettes.roto import DOUBTFUL_BELOW, RotoSegmentation
 
@@ -32,10 +31,7 @@ def run() -> list[Section]:
                "frames under 0.5 IoU"]
     title = "Confidence against the true IoU, from one box"
     roots = [DATA / f"davis-{name}" for name in CLIPS if (DATA / f"davis-{name}").is_dir()]
-    where = os.environ.get("GAIT_MORE_DAVIS")
-    if where and Path(where).is_dir():
-        roots += sorted(p for p in Path(where).iterdir()
-                        if (p / "Annotations").is_dir() and (p / "JPEGImages").is_dir())
+    roots += more_clips()
     if not roots:
         return [Section(title, headers, [], [f"skipped: real footage not found at {DATA}"])]
     rows = [row for root in roots if (row := _ranked(root)) is not None]
@@ -59,11 +55,12 @@ def _ranked(root: Path) -> list | None:
     source, refs = _davis_at(root)
     seg = RotoSegmentation(source, box=padded_box(refs[0]))
     seg.run()
-    ranked = [t for t in range(1, seg.n) if not seg.state(t).lost]
+    states = [seg.state(t) for t in range(seg.n)]
+    ranked = [t for t in range(1, seg.n) if not states[t].lost]
     if not ranked:
         return None
     ious = np.array([iou(seg.mask(t), refs[t]) for t in ranked])
-    confidence = np.array([seg.state(t).confidence for t in ranked])
+    confidence = np.array([states[t].confidence for t in ranked])
     rho = (float(spearmanr(confidence, ious).statistic)
            if len(ranked) > 2 and np.ptp(ious) > 0 and np.ptp(confidence) > 0 else 0.0)
     name = root.name.removeprefix("davis-")

@@ -271,6 +271,16 @@ def _on_still_plate(source, refs, plate: np.ndarray) -> list[np.ndarray]:
     return out
 
 
+def more_clips() -> list[Path]:
+    """Every folder under ``GAIT_MORE_DAVIS`` with ``JPEGImages`` and ``Annotations``, sorted
+    (none when it is unset or not a folder)."""
+    where = os.environ.get("GAIT_MORE_DAVIS")
+    if not where or not Path(where).is_dir():
+        return []
+    return sorted(p for p in Path(where).iterdir()
+                  if (p / "Annotations").is_dir() and (p / "JPEGImages").is_dir())
+
+
 def more_davis() -> Section:
     """The first table's protocol on clips beyond ../shared/data: every folder under
     ``GAIT_MORE_DAVIS`` with ``JPEGImages`` and ``Annotations`` (DAVIS's layout; for instance
@@ -281,8 +291,7 @@ def more_davis() -> Section:
     title = ("More clips in the DAVIS layout, from one box, then one scripted stroke per 10 "
              "frames (GAIT_MORE_DAVIS)")
     where = os.environ.get("GAIT_MORE_DAVIS")
-    clips = sorted(p for p in Path(where).iterdir() if (p / "Annotations").is_dir()
-                   and (p / "JPEGImages").is_dir()) if where and Path(where).is_dir() else []
+    clips = more_clips()
     if not clips:
         return Section(title, headers, [], [
             "skipped: set GAIT_MORE_DAVIS to a folder of clips, each with JPEGImages/ and "

@@ -42,6 +42,7 @@ from gaitcore.analysis.spectrum import MIN_FRAMES, diagnose
 from gaitcore.analysis.verdict import PERIODICITY_ALPHA, Verdict
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Progress, report
+from gaitcore.runs import true_runs
 from gaitcore.silhouettes.tracking import RoiClip, stabilize_rois
 
 
@@ -310,8 +311,7 @@ def _refine(f: np.ndarray, a: int, b: int, period: float,
     ok = (repeat <= floor + settings.repeat_tolerance * (1.0 - floor)) & (
         motion >= floor + settings.motion_share * (typical - floor))
     _close_gaps(ok, quarter)
-    edges = np.flatnonzero(np.diff(np.r_[0, ok.astype(np.int8), 0]))
-    runs = [(int(lo), int(hi)) for lo, hi in zip(edges[::2], edges[1::2]) if lo < b and hi > a]
+    runs = [(lo, hi) for lo, hi in true_runs(ok) if lo < b and hi > a]
     return runs, cycle
 
 
@@ -331,8 +331,7 @@ def _repeat_distance(f: np.ndarray, period: float, spread: float) -> np.ndarray:
 def _close_gaps(ok: np.ndarray, shortest: int) -> None:
     """Accept, in place, runs of rejected frames shorter than ``shortest`` between accepted
     ones (a few bad silhouettes do not cut a stretch)."""
-    edges = np.flatnonzero(np.diff(np.r_[0, (~ok).astype(np.int8), 0]))
-    for s0, s1 in zip(edges[::2], edges[1::2]):
+    for s0, s1 in true_runs(~ok):
         if s1 - s0 < shortest and s0 > 0 and s1 < len(ok):
             ok[s0:s1] = True
 

@@ -84,25 +84,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
-def _spans(frames: list[int]) -> str:
-    """Sorted frame numbers as runs: ``[3, 4, 5, 9]`` -> ``"3-5, 9"``."""
-    runs: list[list[int]] = []
-    for t in frames:
-        if runs and t == runs[-1][1] + 1:
-            runs[-1][1] = t
-        else:
-            runs.append([t, t])
-    return ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs)
-
-
 def print_frames_to_check(states: Sequence[FrameState], first_frame: int = 0) -> None:
     """One line naming the frames worth a look (:attr:`FrameState.to_check`) as source frame
     numbers, ``states[i]`` being of frame ``first_frame + i``."""
+    from gaitcore.runs import true_runs
     from gaitcore.silhouettes.roto import DOUBTFUL_BELOW
 
-    check = [first_frame + t for t, st in enumerate(states) if st.to_check]
-    print(f"frames to check: {_spans(check) if check else 'none'} (lost, or of a confidence "
-          f"under {DOUBTFUL_BELOW} in segmentation.json; correct them with --scribbles)")
+    runs = [(first_frame + a, first_frame + b - 1)
+            for a, b in true_runs([st.to_check for st in states])]
+    named = ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs) or "none"
+    print(f"frames to check: {named} (lost, or of a confidence under {DOUBTFUL_BELOW} in "
+          "segmentation.json; correct them with --scribbles)")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -204,14 +204,12 @@ class RotoSession:
     def restore(self, project: Project) -> bool:
         """Go back to the state matching ``project`` (after an undo or a redo); False when
         the session kept none (segment again with :meth:`start`)."""
-        key = segmentation_key(project)
-        if self._state is not None and self._state.key == key:
-            return True
-        saved = self._saved.get(key)
-        if saved is None:
+        state = self._matching(project)
+        if state is None:
             return False
-        self._state = saved.copied(self.source)
-        self._saved.move_to_end(key)
+        if state is not self._state:
+            self._state = state.copied(self.source)
+            self._saved.move_to_end(state.key)
         return True
 
     def correct(self, project: Project, scribbles: Sequence[Scribble],

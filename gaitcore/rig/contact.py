@@ -24,6 +24,7 @@ from gaitcore.errors import GaitInputError
 from gaitcore.progress import Progress, report
 from gaitcore.rig.ik import leg_joints, solve_chain
 from gaitcore.rig.skeleton import Skeleton
+from gaitcore.runs import true_runs
 
 FOOT_BAND = 0.05
 """End joints whose rest height is within this fraction of the skeleton's height from the
@@ -252,11 +253,12 @@ def stance_mask(foot_xyz: np.ndarray, ground_y_m: float, *, animal_speed_m: floa
     slow = speed <= max(settings.speed_ratio * animal_speed_m, settings.min_speed_m)
     low = x[:, 1] - ground_y_m <= settings.height_m
     mask = slow & low
-    for start, stop in _runs(~mask):  # at the clip's ends, where speed is one-sided: low is enough
+    # At the clip's ends, where speed is one-sided, low is enough.
+    for start, stop in true_runs(~mask):
         inside = start > 0 and stop < len(mask)
         if stop - start <= settings.max_gap_frames and (inside or low[start:stop].all()):
             mask[start:stop] = True
-    for start, stop in _runs(mask):
+    for start, stop in true_runs(mask):
         if stop - start < settings.min_stance_frames:
             mask[start:stop] = False
     return mask
@@ -270,7 +272,7 @@ def _targets(foot: np.ndarray, heel_rise: np.ndarray, stance: np.ndarray,
     n = len(foot)
     weight = np.zeros(n)
     shift = np.zeros_like(foot)
-    for start, stop in _runs(stance):
+    for start, stop in true_runs(stance):
         trusted = start + np.flatnonzero(anchored[start:stop])
         where = foot[trusted] if trusted.size else foot[start:stop]
         spot = np.array([np.median(where[:, 0]), ground, np.median(where[:, 2])])
@@ -287,12 +289,6 @@ def _targets(foot: np.ndarray, heel_rise: np.ndarray, stance: np.ndarray,
 
 def _smooth(u: float) -> float:
     return u * u * (3 - 2 * u)
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(start, stop) of every run of True."""
-    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
-    return list(zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)))
 
 
 def _ground(skeleton: Skeleton, settings: ContactSettings) -> float:

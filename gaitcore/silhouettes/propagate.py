@@ -1139,13 +1139,13 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
     gone = area < settings.max_shrink * prior_area and np.median(evidence[inside > 0]) < 0
     if not gone:
         kept = settings.max_shrink * prior_area <= area <= settings.max_growth * prior_area
-        cut = Cut(mask if kept else inside, 0.0)
-        shows = colour_gap(ratios, cut.mask > 0)
+        held = mask if kept else inside
+        shows = colour_gap(ratios, held > 0)
         reference = colours.gap if gap is None else gap
         gone = reference > 0 and shows < settings.lost_gap * reference
-        if kept:
-            cut = Cut(mask, (float(np.clip(shows / colours.gap, 0.0, 1.0)) if colours.gap > 0
-                             else overlap(mask, inside)))
+        confidence = (float(np.clip(shows / colours.gap, 0.0, 1.0)) if colours.gap > 0
+                      else overlap(mask, inside))
+        cut = Cut(held, confidence if kept else 0.0)
     return Cut(np.zeros_like(inside), 0.0) if gone else cut
 
 

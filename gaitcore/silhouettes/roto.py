@@ -94,9 +94,8 @@ class FrameState:
         In [0, 1]: how far the mask stands out from its surroundings under its key frame's
         colours, as a share of how far the key's own mask did (1 on key frames; 0 where a
         cut was refused as a flood or a collapse, and where a lost subject was searched for
-        and found again; see :func:`fuse_cut`); where both passes
-        reach a frame, theirs weighted as their masks are blended. The lower, the more the
-        frame is worth a look.
+        and found again; see :func:`fuse_cut`); where both passes reach a frame, theirs
+        weighted as their masks are blended. The lower, the more the frame is worth a look.
     """
 
     lost: bool
