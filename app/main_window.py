@@ -355,7 +355,7 @@ class MainWindow(QMainWindow):
         if not frames:
             self._show_message(
                 "no frame to check: every frame stands out about as well as its key frame"
-                if roto.session is not None else
+                if roto.checks_known else
                 "no frames to check yet: they are marked when the clip is segmented or "
                 "corrected")
             return

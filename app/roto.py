@@ -28,7 +28,7 @@ from app.widgets.frame_view import FrameView
 from app.workers import Job
 from gaitcore.errors import GaitInputError
 from gaitcore.io.scribbles import read_scribbles, write_scribbles
-from gaitcore.project.engine_file import resumed, save_engine
+from gaitcore.project.engine_file import resumed, save_engine, saved_frames_to_check
 from gaitcore.project.roto_session import (
     RotoSession,
     corrected,
@@ -55,6 +55,7 @@ class RotoController(QObject):
         self._documents = documents
         self._session: RotoSession | None = None
         self._checked: tuple[object, tuple[int, ...]] = (None, ())
+        self._saved_check: tuple[tuple | None, tuple[int, ...]] = (None, ())
         self._running: Job | None = None
         self._pending: list[Scribble] = []
         self._landed = False
@@ -78,26 +79,45 @@ class RotoController(QObject):
         """The engine of the last segmentation or correction (None before one)."""
         return self._session
 
+    @property
+    def checks_known(self) -> bool:
+        """Whether :meth:`frames_to_check` knows the project's segmentation: one ran (or
+        was corrected) in this session of the app, or its states were saved with the
+        project's engine."""
+        return (self._session is not None
+                or self._saved_check[0] == segmentation_key(self._state.project))
+
     def frames_to_check(self) -> tuple[int, ...]:
         """The frames of the project's segmentation worth a look (lost, or of a low
-        confidence, and not corrected: :meth:`RotoSession.to_check`), for the timeline; none
-        before a segmentation or a correction in this session of the app. While a job
-        changes the engine, those of the project it started from."""
-        if self._session is None:
-            return ()
+        confidence, and not corrected: :meth:`RotoSession.to_check`), for the timeline. Before
+        a segmentation or a correction in this session of the app, those saved with the
+        project's engine (:func:`saved_frames_to_check`) while its segmentation inputs are
+        the ones opened, else none. While a job changes the engine, those of the project it
+        started from."""
         project = self._state.project
-        if (self._running is None or self._landed) and self._checked[0] is not project:
+        if self._checked[0] is project or (self._running is not None and not self._landed):
+            return self._checked[1]
+        if self._session is not None:
             self._checked = (project, self._session.to_check(project))
+        else:
+            self._checked = (project, self._saved_check[1] if self.checks_known else ())
         return self._checked[1]
 
     def _forget(self, *_opened) -> None:
         """A project was opened: its engine, if saved with it, is put back by the first
-        correction (in its job), never before."""
+        correction (in its job), never before; the frames to check saved with it are marked
+        at once."""
         self._session, self._pending, self._preview_key = None, [], None
         self._checked = (None, ())
-        self._opened_from = self._state.path
+        self._opened_from = path = self._state.path
+        project = self._state.project
+        saved = None if path is None else saved_frames_to_check(path, project)
+        self._saved_check = (None if saved is None else segmentation_key(project), saved or ())
         self._view.set_pending(())
         self._view.set_preview(None)
+        if saved:
+            self._documents.messageRaised.emit(
+                f"{len(saved)} frames to check (faint red on the timeline): K goes to the next")
 
     def _save_engine(self, path: Path) -> None:
         """Keep the engine of the project just saved beside its file (a running job changes

@@ -13,7 +13,10 @@ the masks of the forward and backward passes, bit-packed around the subject (a
 :class:`~gaitcore.silhouettes.roto_state.RotoState`; 1.8 to 3 MB for the 540 frames of
 Muybridge's 960x540 race horse, more with more key frames), and ``engine-still-<hash>.npy``
 when the camera held still (the background learnt behind the animal, at the working size:
-B, G, R and whether it is known). A project file without it, or
+B, G, R and whether it is known), and ``engine-states-<hash>.npy``: every frame's lost,
+corrected and confidence (:class:`~gaitcore.silhouettes.roto.FrameState`), so that a reopened
+project marks its frames to check on the timeline at once (:func:`saved_frames_to_check`),
+though the engine itself is put back only by the first correction. A project file without it, or
 with one another version wrote, reads as before; reading the engine never raises: a missing,
 damaged, stale or foreign file reads as None and the next correction segments the clip again
 (nothing the artist made is in it). Writing is atomic (arrays, then the JSON, then arrays no
@@ -45,6 +48,7 @@ from gaitcore.project.storage import array_file, sidecar_dir, write_array, write
 from gaitcore.schema import JsonValue, read_json, read_npy
 from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import StillBackground, WorkingSize
+from gaitcore.silhouettes.roto import FrameState
 from gaitcore.silhouettes.roto_state import RotoState
 from gaitcore.silhouettes.segmentation import SegmentationSettings
 
@@ -60,7 +64,7 @@ MAX_ENGINE_JSON_BYTES = 1 << 16
 MAX_ENGINE_ARRAY_BYTES = 16 << 30
 MAX_ENGINE_FRAMES = 10**8
 MAX_SIDE_PX = 1 << 20
-_ENGINE_ARRAY = re.compile(r"^engine-(table|bits|still)-[0-9a-f]{16}\.npy$")
+_ENGINE_ARRAY = re.compile(r"^engine-(table|bits|still|states)-[0-9a-f]{16}\.npy$")
 
 
 def engine_fingerprint(project: Project) -> str:
@@ -149,6 +153,9 @@ def write_engine(path: str | os.PathLike, fingerprint: str, state: RotoState) ->
         if state.still is not None:
             arrays["still"] = write_array(side, "engine-still", np.dstack(
                 [state.still.image, state.still.known.astype(np.uint8)]))
+        if state.frame_states:
+            arrays["states"] = write_array(side, "engine-states", np.array(
+                [(st.lost, st.corrected, st.confidence) for st in state.frame_states]))
         doc = {"format": ENGINE_FORMAT, "version": ENGINE_VERSION, "fingerprint": fingerprint,
                "n_frames": state.n_frames,
                "work": {"scale": work.scale, "wh": list(work.wh), "shape": list(work.shape),
@@ -173,6 +180,24 @@ def read_engine(path: str | os.PathLike, fingerprint: str) -> RotoState | None:
         return _read(doc, side)
     except (GaitInputError, OSError, ValueError):
         return None
+
+
+def saved_frames_to_check(path: str | os.PathLike, project: Project) -> tuple[int, ...] | None:
+    """The frames to check (:attr:`~gaitcore.silhouettes.roto.FrameState.to_check`) of
+    ``project``'s segmentation as saved beside project file ``path``, read without its masks;
+    None when no engine of ``project``'s inputs with its frames' states is there (never an
+    error, as :func:`read_engine`)."""
+    side = sidecar_dir(Path(path).absolute())
+    try:
+        doc = _engine_doc(side)
+        if (doc is None or doc.key("fingerprint").value != engine_fingerprint(project)
+                or not doc.key("arrays").has("states")):
+            return None
+        n = doc.key("n_frames").integer(lo=1, hi=MAX_ENGINE_FRAMES)
+        states = _frame_states(_array(doc, side, "states", "f", 2), n)
+    except (GaitInputError, OSError, ValueError):
+        return None
+    return tuple(t for t, st in enumerate(states) if st.to_check)
 
 
 def engine_saved(path: str | os.PathLike, fingerprint: str) -> bool:
@@ -211,18 +236,10 @@ def _read(doc: JsonValue, side: Path) -> RotoState:
     work = WorkingSize(w.key("scale").number(lo=0, lo_open=True, hi=1), (wh[0], wh[1]),
                        (shape[0], shape[1]), w.key("subject_side").number(lo=0, hi=MAX_SIDE_PX))
     key_area = doc.key("key_area").number(lo=1, hi=float(wh[0]) * wh[1])
-    arrays = {}
     names = [("table", "f", 2), ("bits", "u", 1)]
-    if doc.key("arrays").has("still"):
-        names.append(("still", "u", 3))
-    for name, kind, ndim in names:
-        file = doc.key("arrays").key(name).text()
-        if not _ENGINE_ARRAY.match(file):
-            raise doc.key("arrays").key(name).fail("the name of an engine array")
-        arrays[name] = read_npy(side / file, what="segmentation engine array", kind=kind,
-                                ndim=ndim, max_bytes=MAX_ENGINE_ARRAY_BYTES)
-        if array_file(f"engine-{name}", arrays[name])[0] != file:
-            raise GaitInputError(f"{file} does not hold what its name says: it is damaged")
+    names += [(name, kind, ndim) for name, kind, ndim in (("still", "u", 3), ("states", "f", 2))
+              if doc.key("arrays").has(name)]
+    arrays = {name: _array(doc, side, name, kind, ndim) for name, kind, ndim in names}
     table, bits = arrays["table"], arrays["bits"]
     if table.shape[1:] != (7,) or bits.dtype != np.uint8:
         raise GaitInputError("the engine's table has the wrong width")
@@ -242,7 +259,29 @@ def _read(doc: JsonValue, side: Path) -> RotoState:
         if both.shape != (wh[1], wh[0], 4) or both.dtype != np.uint8 or both[..., 3].max() > 1:
             raise GaitInputError("the engine's still background is not of its working size")
         still = StillBackground(np.ascontiguousarray(both[..., :3]), both[..., 3] > 0)
-    return RotoState(n, work, key_area, masks["keys"], masks["fwd"], masks["bwd"], still)
+    states = _frame_states(arrays["states"], n) if "states" in arrays else ()
+    return RotoState(n, work, key_area, masks["keys"], masks["fwd"], masks["bwd"], still, states)
+
+
+def _array(doc: JsonValue, side: Path, name: str, kind: str, ndim: int) -> np.ndarray:
+    """The engine array ``name`` that ``doc`` names, checked against its name's hash."""
+    file = doc.key("arrays").key(name).text()
+    if not _ENGINE_ARRAY.match(file):
+        raise doc.key("arrays").key(name).fail("the name of an engine array")
+    arr = read_npy(side / file, what="segmentation engine array", kind=kind, ndim=ndim,
+                   max_bytes=MAX_ENGINE_ARRAY_BYTES)
+    if array_file(f"engine-{name}", arr)[0] != file:
+        raise GaitInputError(f"{file} does not hold what its name says: it is damaged")
+    return arr
+
+
+def _frame_states(arr: np.ndarray, n: int) -> tuple[FrameState, ...]:
+    """Every frame's state from the (lost, corrected, confidence) rows of ``arr``."""
+    if (arr.shape != (n, 3) or not np.isin(arr[:, :2], (0.0, 1.0)).all()
+            or not ((arr[:, 2] >= 0) & (arr[:, 2] <= 1)).all()):
+        raise GaitInputError("the engine's frame states are not one (lost, corrected, "
+                             "confidence) row per frame")
+    return tuple(FrameState(bool(lost), bool(fixed), float(conf)) for lost, fixed, conf in arr)
 
 
 def _remove_arrays(side: Path, *, keep: set[str]) -> None:

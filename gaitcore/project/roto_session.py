@@ -23,7 +23,7 @@ from __future__ import annotations
 import copy
 from collections import OrderedDict
 from collections.abc import Callable, Collection, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import cv2
@@ -175,9 +175,10 @@ class RotoSession:
 
     def state_for(self, project: Project) -> RotoState | None:
         """The engine's state for ``project`` (current or kept for undo) as plain data, to
-        save; None when the session holds none."""
+        save, every frame's :class:`FrameState` with it; None when the session holds none."""
         state = self._matching(project)
-        return None if state is None else roto_state(state.engine)
+        return None if state is None else replace(roto_state(state.engine),
+                                                  frame_states=tuple(state.states))
 
     def to_check(self, project: Project) -> tuple[int, ...]:
         """The frames of ``project``'s segmentation worth the artist's look

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import StillBackground, WorkingSize
-from gaitcore.silhouettes.roto import RotoSegmentation
+from gaitcore.silhouettes.roto import FrameState, RotoSegmentation
 
 
 @dataclass(frozen=True)
@@ -33,6 +33,10 @@ class RotoState:
         working size.
     still : StillBackground or None
         :attr:`RotoSegmentation.still`.
+    frame_states : tuple of FrameState
+        Every frame's :class:`~gaitcore.silhouettes.roto.FrameState` when the state was
+        taken from a session that had them (empty otherwise), so that a reopened project
+        shows its frames to check before the engine is put back.
     """
 
     n_frames: int
@@ -42,6 +46,7 @@ class RotoState:
     fwd: PackedMasks
     bwd: PackedMasks
     still: StillBackground | None = None
+    frame_states: tuple[FrameState, ...] = ()
 
 
 def roto_state(seg: RotoSegmentation) -> RotoState:

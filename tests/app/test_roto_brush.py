@@ -313,10 +313,11 @@ def test_real_footage_from_brush_strokes_alone_keeps_the_legs(qtbot, window, sha
 
 
 def test_the_timeline_marks_the_frames_to_check_and_k_goes_to_them(qtbot, window, tmp_path,
-                                                                    artifacts_dir):
+                                                                    asker, artifacts_dir):
     """A body that fades in a shade on frames 5-7 (see ``shaded_scene``): after segmenting,
     the timeline shows frame 5 (kept, at a low confidence) faint red and the lost frames 6
-    and 7 red; K goes from frame 0 to 5, then 6; a subject stroke on frame 6 takes it off."""
+    and 7 red; K goes from frame 0 to 5, then 6; a subject stroke on frame 6 takes it off;
+    saved and reopened, the project shows the same marks before any correction."""
     from PySide6.QtGui import QAction, QKeySequence
 
     from app.widgets.timeline import CHECK_COLOUR, LOST_COLOUR
@@ -354,4 +355,21 @@ def test_the_timeline_marks_the_frames_to_check_and_k_goes_to_them(qtbot, window
     assert window.state.frame == 6 and "4 frames to check" in window.statusBar().currentMessage()
     _paint(qtbot, window, Tool.SUBJECT_BRUSH, 6, [(62, 60), (70, 60), (78, 60)])
     assert window.state.project.corrected_frames() == (6,)
-    assert 6 not in timeline.frames_to_check()
+    marked = timeline.frames_to_check()
+    assert marked and 6 not in marked
+    # Saved and reopened: the marks are back at once, before the engine is.
+    asker.next_save_path = tmp_path / "shade.gaitproj"
+    assert window.documents.save_as()
+    assert window.open_path(tmp_path / "shade.gaitproj")
+    wait_ready(qtbot, window)
+    assert window.tools.roto.session is None and timeline.frames_to_check() == marked
+    assert f"{len(marked)} frames to check" in window.statusBar().currentMessage()
+    window.state.set_frame(0)
+    go.trigger()
+    assert window.state.frame == marked[0]
+    timeline.grab().save(str(artifacts_dir / "app_timeline_to_check_reopened.png"))
+    # Other inputs than those saved (the box moved): no marks, and K says why.
+    window.state.undo_stack.push(SetBoxCommand(window.state, Rect(10, 30, 80, 50)))
+    assert timeline.frames_to_check() == ()
+    go.trigger()
+    assert "yet" in window.statusBar().currentMessage()

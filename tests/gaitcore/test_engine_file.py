@@ -20,17 +20,20 @@ from gaitcore.project.engine_file import (
     read_engine,
     resumed,
     save_engine,
+    saved_frames_to_check,
     write_engine,
 )
 from gaitcore.project.roto_session import RotoSession, corrected
 from gaitcore.project.storage import load_project, save_project, sidecar_dir, write_array
-from gaitcore.silhouettes.annotations import Scribble
+from gaitcore.silhouettes.annotations import Rect, Scribble
 from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import Cut, StillBackground, WorkingSize
+from gaitcore.silhouettes.roto import FrameState
 from gaitcore.silhouettes.roto_state import RotoState
 from tests.fuzzing import DEFAULT_CASES, check_reader, mutate_json
 from tests.gaitcore.conftest import SCENE_FRAMES
 from tests.gaitcore.test_fuzz_readers import _damage_array
+from tests.gaitcore.test_roto_session import shaded_scene
 
 N = SCENE_FRAMES
 KEY = Scribble([[40.0, 52.0]], 4, 5, "subject")
@@ -176,6 +179,33 @@ def test_save_as_carries_the_engine_and_undo_states_are_saved(scene_images, tmp_
         assert resumed(None, source, project, saved=path) is not None
 
 
+def test_a_reopened_project_names_its_frames_to_check_without_reading_its_masks(tmp_path):
+    folder, path = tmp_path / "shade", tmp_path / "shade.gaitproj"
+    project = Project(footage=folder, box=shaded_scene(folder))
+    with open_frames(folder) as source:
+        session = RotoSession.start(source, project)
+    project = replace(project, silhouettes=session.silhouettes())
+    save_project(project, path)
+    assert save_engine(path, project, session)
+    loaded = load_project(path)
+    assert saved_frames_to_check(path, loaded) == session.to_check(project) == (5, 6, 7, 8)
+    assert read_engine(path, engine_fingerprint(loaded)).frame_states == session.states()
+    copy = tmp_path / "copy" / "shade.gaitproj"  # "save as" without a session carries them
+    save_project(loaded, copy)
+    assert save_engine(copy, loaded, None, opened_from=path)
+    assert saved_frames_to_check(copy, loaded) == (5, 6, 7, 8)
+    for f in sidecar_dir(path).glob("engine-bits-*.npy"):
+        f.unlink()  # the masks are not read
+    assert saved_frames_to_check(path, loaded) == (5, 6, 7, 8)
+    assert read_engine(path, engine_fingerprint(loaded)) is None
+    assert saved_frames_to_check(path, replace(loaded, box=Rect(10, 30, 80, 50))) is None
+    doc = json.loads((sidecar_dir(copy) / ENGINE_FILE).read_text())
+    del doc["arrays"]["states"]  # an engine saved before the states were
+    (sidecar_dir(copy) / ENGINE_FILE).write_text(json.dumps(doc))
+    assert saved_frames_to_check(copy, loaded) is None
+    assert read_engine(copy, engine_fingerprint(loaded)).frame_states == ()
+
+
 def test_packed_masks_round_trip_and_refuse_bad_arrays():
     rng = np.random.default_rng(1)
     masks = PackedMasks((20, 30))
@@ -209,7 +239,9 @@ def test_fuzzed_engine_files_read_as_none_or_as_masks_that_fit(tmp_path):
         stores.append(masks)
     still = StillBackground(rng.integers(0, 256, (12, 16, 3), dtype=np.uint8),
                             rng.random((12, 16)) > 0.2)
-    state = RotoState(6, WorkingSize(0.5, (16, 12), (24, 32), 20.0), 40.0, *stores, still)
+    states = tuple(FrameState(t in (2, 3), t == 4, round(t / 5, 3)) for t in range(6))
+    state = RotoState(6, WorkingSize(0.5, (16, 12), (24, 32), 20.0), 40.0, *stores, still,
+                      states)
     valid = tmp_path / "valid" / "p.gaitproj"
     write_engine(valid, "f" * 64, state)
     doc = json.loads((sidecar_dir(valid) / ENGINE_FILE).read_text())
@@ -233,7 +265,9 @@ def test_fuzzed_engine_files_read_as_none_or_as_masks_that_fit(tmp_path):
         if read.still is not None:
             assert read.still.image.shape == (*read.work.wh[::-1], 3)
             assert read.still.known.shape == read.work.wh[::-1]
+        assert len(read.frame_states) in (0, read.n_frames)
+        assert all(0 <= st.confidence <= 1 for st in read.frame_states)
 
     check_reader(write_case, lambda p: read_engine(p, "f" * 64), tmp_path / "cases",
                  n_cases=DEFAULT_CASES, seed=3, check=fits)
-    assert read_engine(valid, "f" * 64) is not None
+    assert read_engine(valid, "f" * 64).frame_states == states
