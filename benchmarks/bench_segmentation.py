@@ -240,10 +240,10 @@ def still_camera() -> Section:
         "the reference's on frame 0 padded 4%, no strokes",
         "the still background: per pixel, the median of 15 frames sampled across the clip "
         "where the engine's own first masks leave the ground free; the clip is then carried "
-        "again with how unlike it each pixel looks as a cue (propagate.StillBackground.ratios)",
+        "again with how unlike it each pixel looks as a cue (ground.StillBackground.ratios)",
         "nearby ground's cue only: no still background is sought (still_weight 0), so the "
         "frames up to 8 either side of each give the ground behind the animal "
-        "(propagate.NearbyGround), as on a panning camera; on the tests' synthetic still "
+        "(ground.NearbyGround), as on a panning camera; on the tests' synthetic still "
         "scene (an animal of nearly the ground's colours) it reads 0.63, the still "
         "background's 0.97, neither 0.50",
         "a plain median of the frames (not masked by the animal) read bear / dog / goat "

@@ -46,8 +46,9 @@ from gaitcore.project.document import Project
 from gaitcore.project.roto_session import RotoSession, reusable, segmentation_key
 from gaitcore.project.storage import array_file, sidecar_dir, write_array, write_atomic
 from gaitcore.schema import JsonValue, read_json, read_npy
+from gaitcore.silhouettes.ground import StillBackground
 from gaitcore.silhouettes.packed_masks import PackedMasks
-from gaitcore.silhouettes.propagate import StillBackground, WorkingSize
+from gaitcore.silhouettes.propagate import WorkingSize
 from gaitcore.silhouettes.roto import FrameState
 from gaitcore.silhouettes.roto_state import RotoState
 from gaitcore.silhouettes.segmentation import SegmentationSettings

@@ -29,6 +29,14 @@ from gaitcore.footage.sources import prefetched
 from gaitcore.progress import Progress, report
 from gaitcore.silhouettes.annotations import Rect, Scribble, check_scribbles, check_start
 from gaitcore.silhouettes.colour_model import ColourModel, check_frame, colour_gap, rect_mask
+from gaitcore.silhouettes.ground import (
+    STILL_FRAMES,
+    STILL_LEAST,
+    NearbyGround,
+    StillBackground,
+    camera_held_still,
+    may_hold_still,
+)
 from gaitcore.silhouettes.keyframe import (
     cut_first,
     cut_with_prior,
@@ -37,23 +45,17 @@ from gaitcore.silhouettes.keyframe import (
 )
 from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import (
-    STILL_FRAMES,
-    STILL_LEAST,
     TOUCHING,
     Cut,
     ExposureTrack,
-    NearbyGround,
     PropagationSettings,
-    StillBackground,
     WorkingSize,
-    camera_held_still,
     disk,
     exposed,
     find_again,
     fuse_cut,
     key_colours,
     make_flow,
-    may_hold_still,
     overlap,
     warp_mask,
 )

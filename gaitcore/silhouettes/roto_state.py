@@ -11,8 +11,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from gaitcore.silhouettes.ground import StillBackground
 from gaitcore.silhouettes.packed_masks import PackedMasks
-from gaitcore.silhouettes.propagate import StillBackground, WorkingSize
+from gaitcore.silhouettes.propagate import WorkingSize
 from gaitcore.silhouettes.roto import FrameState, RotoSegmentation
 
 

@@ -26,8 +26,9 @@ from gaitcore.project.engine_file import (
 from gaitcore.project.roto_session import RotoSession, corrected
 from gaitcore.project.storage import load_project, save_project, sidecar_dir, write_array
 from gaitcore.silhouettes.annotations import Rect, Scribble
+from gaitcore.silhouettes.ground import StillBackground
 from gaitcore.silhouettes.packed_masks import PackedMasks
-from gaitcore.silhouettes.propagate import Cut, StillBackground, WorkingSize
+from gaitcore.silhouettes.propagate import Cut, WorkingSize
 from gaitcore.silhouettes.roto import FrameState
 from gaitcore.silhouettes.roto_state import RotoState
 from tests.fuzzing import DEFAULT_CASES, check_reader, mutate_json

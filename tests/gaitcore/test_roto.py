@@ -1117,7 +1117,7 @@ def test_a_panning_camera_tells_an_animal_of_the_grounds_colours_from_the_ground
 def test_the_cameras_motion_is_found_off_the_animal():
     """A frame and the same view shifted and turned a little, with an animal moving its own
     way: the homography found maps the ground, not the animal."""
-    from gaitcore.silhouettes.propagate import camera_motion
+    from gaitcore.silhouettes.ground import camera_motion
 
     rng = np.random.default_rng(5)
     ground = cv2.GaussianBlur(rng.integers(0, 255, (200, 300)).astype(np.uint8), (0, 0), 2.0)
@@ -1171,7 +1171,7 @@ def test_a_stroke_teaches_its_key_frames_colours_beyond_the_mask_it_left():
 def test_the_nearby_grounds_difference_is_the_median_of_the_frames_that_saw_it():
     """Each pixel's difference from the nearby ground is the (lower) median of the
     differences of the frames that saw the ground there (255: hidden by the animal)."""
-    from gaitcore.silhouettes.propagate import _picked, _sorted
+    from gaitcore.silhouettes.ground import _picked, _sorted
 
     rng = np.random.default_rng(2)
     planes = [np.where(rng.random((40, 50)) < 0.3, 255, rng.integers(0, 255, (40, 50)))
