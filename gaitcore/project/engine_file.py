@@ -7,7 +7,7 @@ lets the first correction after reopening be as quick as the next ones.
 
 The engine is derived data, not the artist's work, so it lives apart from the project
 document: ``horse.gaitproj.d/engine.json`` (format, version, a fingerprint of what the
-segmentation depends on, the working size, the key area and the names of two arrays) and
+segmentation depends on, the working size, the key area and the names of its arrays) and
 ``engine-table-<hash>.npy`` and ``engine-bits-<hash>.npy`` beside it: the key frames' cuts and
 the masks of the forward and backward passes, bit-packed around the subject (a
 :class:`~gaitcore.silhouettes.roto_state.RotoState`; 1.8 to 3 MB for the 540 frames of
@@ -16,10 +16,10 @@ when the camera held still (the background learnt behind the animal, at the work
 B, G, R and whether it is known), and ``engine-states-<hash>.npy``: every frame's lost,
 corrected and confidence (:class:`~gaitcore.silhouettes.roto.FrameState`), so that a reopened
 project marks its frames to check on the timeline at once (:func:`saved_frames_to_check`),
-though the engine itself is put back only by the first correction. A project file without it, or
-with one another version wrote, reads as before; reading the engine never raises: a missing,
-damaged, stale or foreign file reads as None and the next correction segments the clip again
-(nothing the artist made is in it). Writing is atomic (arrays, then the JSON, then arrays no
+though the engine itself is put back only by the first correction. A project file without an
+engine (or without its states), or with one another version wrote, reads as before; reading
+the engine never raises: a missing, damaged, stale or foreign file reads as None and the next
+correction segments the clip again (nothing the artist made is in it). Writing is atomic (arrays, then the JSON, then arrays no
 longer named are removed), as :mod:`gaitcore.project.storage` writes projects; the project's
 own files are never touched.
 
