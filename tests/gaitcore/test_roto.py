@@ -852,6 +852,37 @@ def test_a_first_cut_in_a_corner_of_a_loose_box_is_not_kept(shared_data):
     assert iou(first, refs[0]) > 0.6, iou(first, refs[0])
 
 
+def test_a_box_around_more_than_the_animal_keeps_the_cut_of_what_moves():
+    """A box drawn around the animal and a still sign beside it (as DAVIS kite-surf's box
+    holds the kite's lines, paragliding-launch's the wing): no cut spans the box, and the
+    whole box's cut takes the sign, the larger thing that stands out from the grass. The cut
+    seeded by what moves, whose colours separate its two sides better, is kept (the sign
+    was kept when the whole box's cut won whenever no cut spanned)."""
+    rng = np.random.default_rng(5)
+    green, brown, teal = np.array([60, 140, 70]), np.array([40, 80, 160]), np.array([105, 130, 70])
+    ground = np.clip(rng.normal(green, 10, (240, 320, 3)), 0, 255).astype(np.uint8)
+    sign = np.zeros((240, 320), np.uint8)
+    cv2.rectangle(sign, (150, 40), (290, 150), 1, -1)
+    ground[sign > 0] = np.clip(rng.normal(teal, 10, (int(sign.sum()), 3)), 0, 255)
+    coat = np.clip(rng.normal(brown, 10, (240, 320, 3)), 0, 255).astype(np.uint8)
+
+    def animal(x: int) -> np.ndarray:
+        body = np.zeros((240, 320), np.uint8)
+        cv2.ellipse(body, (x, 170), (40, 18), 0, 0, 360, 1, -1)
+        for leg in (x - 25, x + 25):
+            cv2.rectangle(body, (leg - 4, 170), (leg + 4, 205), 1, -1)
+        return body > 0
+
+    frames = []
+    for t in range(12):  # the animal walks right, its coat with it
+        frame, body = ground.copy(), animal(90 + 3 * t)
+        frame[body] = np.roll(coat, 3 * t, axis=1)[body]
+        frames.append(frame)
+    seg = RotoSegmentation(frames, box=Rect(40, 30, 260, 185))
+    first = seg.work.enlarge(seg._first_cut().mask, frames[0])
+    assert iou(first, animal(90)) > 0.9 and not (first & (sign > 0)).any()
+
+
 def test_a_stroke_changes_its_frame_near_itself_only():
     """A corrected frame whose mask holds a wrong strip of background along the top of its
     box, far from the stroke painted at the bottom: the graph cut of the whole frame would
