@@ -135,8 +135,8 @@ def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndar
         0.662 to 0.681); carried through those 10 clips, from 0.237 to 0.285 (4 higher, 4
         lower). On eight animal clips boxed 10, 20 and 30% loose, it changed 3 of 24 first
         cuts, each for the better (cows at 30%: 0.34 to 0.75; over 15 boxes within 2 pixels
-        of that one, 0.38 to 0.51, every one better). A part of the subject is a start the artist can correct; an empty first frame, or
-        the background, loses the whole clip.
+        of that one, 0.38 to 0.51, every one better). A part of the subject is a start the
+        artist can correct; an empty first frame, or the background, loses the whole clip.
     """
     if box is None:
         return _cut_labels(small, None, None, subject, background, settings)
