@@ -115,9 +115,13 @@ class RotoController(QObject):
         self._saved_check = (None if saved is None else segmentation_key(project), saved or ())
         self._view.set_pending(())
         self._view.set_preview(None)
-        if saved:
+        self._say_how_many_to_check()
+
+    def _say_how_many_to_check(self) -> None:
+        """Tell the artist how many frames are marked to check, when any are."""
+        if check := self.frames_to_check():
             self._documents.messageRaised.emit(
-                f"{len(saved)} frames to check (faint red on the timeline): K goes to the next")
+                f"{len(check)} frames to check (faint red on the timeline): K goes to the next")
 
     def _save_engine(self, path: Path) -> None:
         """Keep the engine of the project just saved beside its file (a running job changes
@@ -237,10 +241,7 @@ class RotoController(QObject):
                     "the project changed while segmenting: the result was dropped, try again")
                 return
             push(silhouettes)
-            if check := self.frames_to_check():
-                self._documents.messageRaised.emit(
-                    f"{len(check)} frames to check (faint red on the timeline): K goes to the "
-                    "next")
+            self._say_how_many_to_check()
 
         self._running, self._landed = job, False
         job.finished.connect(self._finished)

@@ -35,8 +35,10 @@ import hashlib
 import json
 import os
 import re
+from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -49,7 +51,7 @@ from gaitcore.schema import JsonValue, read_json, read_npy
 from gaitcore.silhouettes.ground import StillBackground
 from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import WorkingSize
-from gaitcore.silhouettes.roto import FrameState
+from gaitcore.silhouettes.roto import FrameState, frames_to_check
 from gaitcore.silhouettes.roto_state import RotoState
 from gaitcore.silhouettes.segmentation import SegmentationSettings
 
@@ -65,6 +67,7 @@ MAX_ENGINE_JSON_BYTES = 1 << 16
 MAX_ENGINE_ARRAY_BYTES = 16 << 30
 MAX_ENGINE_FRAMES = 10**8
 MAX_SIDE_PX = 1 << 20
+T = TypeVar("T")
 _ENGINE_ARRAY = re.compile(r"^engine-(table|bits|still|states)-[0-9a-f]{16}\.npy$")
 
 
@@ -173,42 +176,43 @@ def read_engine(path: str | os.PathLike, fingerprint: str) -> RotoState | None:
     """The engine state saved beside project file ``path`` when its fingerprint is
     ``fingerprint``; None when there is none, or it is of other inputs, another version, or
     damaged (never an error: the clip can always be segmented again)."""
+    return _read_matching(path, fingerprint, _read)
+
+
+def saved_frames_to_check(path: str | os.PathLike, project: Project) -> tuple[int, ...] | None:
+    """The frames to check (:func:`~gaitcore.silhouettes.roto.frames_to_check`) of
+    ``project``'s segmentation as saved beside project file ``path``, read without its masks;
+    None when no engine of ``project``'s inputs with its frames' states is there (never an
+    error, as :func:`read_engine`)."""
+
+    def states(doc: JsonValue, side: Path) -> tuple[int, ...] | None:
+        if not doc.key("arrays").has("states"):
+            return None
+        n = doc.key("n_frames").integer(lo=1, hi=MAX_ENGINE_FRAMES)
+        return frames_to_check(_frame_states(_array(doc, side, "states", "f", 2), n))
+
+    return _read_matching(path, engine_fingerprint(project), states)
+
+
+def _read_matching(path: str | os.PathLike, fingerprint: str,
+                   read: Callable[[JsonValue, Path], T | None]) -> T | None:
+    """``read(doc, folder)`` of the engine saved beside project file ``path`` when its
+    fingerprint is ``fingerprint``; None when there is none, or it is of other inputs,
+    another version, or damaged."""
     side = sidecar_dir(Path(path).absolute())
     try:
         doc = _engine_doc(side)
         if doc is None or doc.key("fingerprint").text(max_len=128) != fingerprint:
             return None
-        return _read(doc, side)
+        return read(doc, side)
     except (GaitInputError, OSError, ValueError):
         return None
-
-
-def saved_frames_to_check(path: str | os.PathLike, project: Project) -> tuple[int, ...] | None:
-    """The frames to check (:attr:`~gaitcore.silhouettes.roto.FrameState.to_check`) of
-    ``project``'s segmentation as saved beside project file ``path``, read without its masks;
-    None when no engine of ``project``'s inputs with its frames' states is there (never an
-    error, as :func:`read_engine`)."""
-    side = sidecar_dir(Path(path).absolute())
-    try:
-        doc = _engine_doc(side)
-        if (doc is None or doc.key("fingerprint").value != engine_fingerprint(project)
-                or not doc.key("arrays").has("states")):
-            return None
-        n = doc.key("n_frames").integer(lo=1, hi=MAX_ENGINE_FRAMES)
-        states = _frame_states(_array(doc, side, "states", "f", 2), n)
-    except (GaitInputError, OSError, ValueError):
-        return None
-    return tuple(t for t, st in enumerate(states) if st.to_check)
 
 
 def engine_saved(path: str | os.PathLike, fingerprint: str) -> bool:
     """True when an engine of ``fingerprint`` is named beside project file ``path`` (its
     arrays are not read)."""
-    try:
-        doc = _engine_doc(sidecar_dir(Path(path).absolute()))
-        return doc is not None and doc.key("fingerprint").value == fingerprint
-    except (GaitInputError, OSError):
-        return False
+    return _read_matching(path, fingerprint, lambda _doc, _side: True) is not None
 
 
 def remove_engine(path: str | os.PathLike) -> None:

@@ -37,7 +37,7 @@ from gaitcore.progress import Progress, report
 from gaitcore.project.document import Project, Silhouettes
 from gaitcore.project.steps import check_segmentation_input
 from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
-from gaitcore.silhouettes.roto import FrameState, RotoSegmentation
+from gaitcore.silhouettes.roto import FrameState, RotoSegmentation, frames_to_check
 from gaitcore.silhouettes.roto_state import RotoState, restore_state, roto_state
 from gaitcore.silhouettes.segmentation import (
     SegmentationSettings,
@@ -185,8 +185,7 @@ class RotoSession:
         (:attr:`FrameState.to_check`: lost, or of a low confidence, and not corrected); none
         when the session holds no segmentation of its inputs."""
         state = self._matching(project)
-        return () if state is None else tuple(t for t, st in enumerate(state.states)
-                                              if st.to_check)
+        return () if state is None else frames_to_check(state.states)
 
     def _matching(self, project: Project) -> _EngineState | None:
         """The state (current or kept for undo) of ``project``'s inputs, or None."""

@@ -168,7 +168,7 @@ def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndar
         return max(cuts, key=lambda mask: _separation(small, mask, box))
     whole_cut = masks[0] if with_whole else cut(whole)
     least = _LEAST_SHARE * w * h
-    found = [mask for mask in [*masks, *([] if with_whole else [whole_cut])]
+    found = [mask for mask in (masks if with_whole else [*masks, whole_cut])
              if mask.sum() >= least]
     return max(found, key=lambda mask: _separation(small, mask, box)) if found else whole_cut
 

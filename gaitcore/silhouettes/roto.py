@@ -110,6 +110,12 @@ class FrameState:
         return not self.corrected and (self.lost or self.confidence < DOUBTFUL_BELOW)
 
 
+def frames_to_check(states: Sequence[FrameState]) -> tuple[int, ...]:
+    """The positions of the :attr:`FrameState.to_check` states (frame numbers, for a whole
+    clip's states in order)."""
+    return tuple(t for t, st in enumerate(states) if st.to_check)
+
+
 class RotoSegmentation:
     """Silhouettes of a whole clip, propagated from key frames both ways.
 
