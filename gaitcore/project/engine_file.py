@@ -7,7 +7,7 @@ lets the first correction after reopening be as quick as the next ones.
 
 The engine is derived data, not the artist's work, so it lives apart from the project
 document: ``horse.gaitproj.d/engine.json`` (format, version, a fingerprint of what the
-segmentation depends on, the working size, the key area and the names of its arrays) and
+segmentation depends on, the working size and the names of its arrays) and
 ``engine-table-<hash>.npy`` and ``engine-bits-<hash>.npy`` beside it: the key frames' cuts and
 the masks of the forward and backward passes, bit-packed around the subject (a
 :class:`~gaitcore.silhouettes.roto_state.RotoState`; 1.8 to 3 MB for the 540 frames of
@@ -164,7 +164,7 @@ def write_engine(path: str | os.PathLike, fingerprint: str, state: RotoState) ->
                "n_frames": state.n_frames,
                "work": {"scale": work.scale, "wh": list(work.wh), "shape": list(work.shape),
                         "subject_side": work.subject_side},
-               "key_area": state.key_area, "arrays": arrays}
+               "arrays": arrays}
         write_atomic(side / ENGINE_FILE, (json.dumps(doc, indent=1) + "\n").encode("utf-8"))
         _remove_arrays(side, keep=set(arrays.values()))
     except OSError as exc:
@@ -240,7 +240,6 @@ def _read(doc: JsonValue, side: Path) -> RotoState:
     shape = w.key("shape").integers(length=2, lo=1, hi=MAX_SIDE_PX)
     work = WorkingSize(w.key("scale").number(lo=0, lo_open=True, hi=1), (wh[0], wh[1]),
                        (shape[0], shape[1]), w.key("subject_side").number(lo=0, hi=MAX_SIDE_PX))
-    key_area = doc.key("key_area").number(lo=1, hi=float(wh[0]) * wh[1])
     names = [("table", "f", 2), ("bits", "u", 1)]
     names += [(name, kind, ndim) for name, kind, ndim in (("still", "u", 3), ("states", "f", 2))
               if doc.key("arrays").has(name)]
@@ -265,7 +264,7 @@ def _read(doc: JsonValue, side: Path) -> RotoState:
             raise GaitInputError("the engine's still background is not of its working size")
         still = StillBackground(np.ascontiguousarray(both[..., :3]), both[..., 3] > 0)
     states = _frame_states(arrays["states"], n) if "states" in arrays else ()
-    return RotoState(n, work, key_area, masks["keys"], masks["fwd"], masks["bwd"], still, states)
+    return RotoState(n, work, masks["keys"], masks["fwd"], masks["bwd"], still, states)
 
 
 def _array(doc: JsonValue, side: Path, name: str, kind: str, ndim: int) -> np.ndarray:

@@ -167,7 +167,6 @@ class RotoSegmentation:
         self.fwd = PackedMasks(self.work.wh[::-1])
         self.bwd = PackedMasks(self.work.wh[::-1])
         self.keys: dict[int, Cut] = {}
-        self.key_area = 1.0
         self.still: StillBackground | None = None
 
     # -- public -----------------------------------------------------------------------------
@@ -187,7 +186,6 @@ class RotoSegmentation:
         key_frames = sorted({0} | set(self.corrected_frames))
         self.keys[0] = self._first_cut()
         self._check_first_cut(self.keys[0].mask)
-        self.key_area = max(1.0, float(self.keys[0].mask.sum()))
         may_hold_still = self._may_hold_still()
         done = [1]
         total = self.n + sum(b - a for a, b in zip(key_frames, key_frames[1:]))
@@ -248,8 +246,7 @@ class RotoSegmentation:
         only where it matters: a frame that keeps strokes is cut again from the forward
         pass's mask, as :meth:`run` cuts it (frame 0 from its box or rectangles); one left
         without strokes stops being a key frame, and its neighbouring keys' passes run across
-        it. The lost frames' reference area stays that of the first cut, as after
-        :meth:`correct`.
+        it.
 
         Returns
         -------
@@ -303,12 +300,21 @@ class RotoSegmentation:
         return self.work.enlarge(cut.mask, image), state
 
     def _state(self, t: int, cut: Cut) -> FrameState:
-        return FrameState(self._lost(cut.mask), t in set(self.corrected_frames),
+        keys = (t,) if t in self.keys else self._neighbours(t)
+        area = min(self._key_area(k) for k in keys if k in self.keys)
+        return FrameState(self._lost(cut.mask, area), t in set(self.corrected_frames),
                           round(cut.confidence, 3))
 
-    def _lost(self, mask: np.ndarray) -> bool:
-        """Whether a mask holds under ``lost_frac`` of the first key's area."""
-        return float(mask.sum()) < self.s.lost_frac * self.key_area
+    def _key_area(self, k: int) -> float:
+        return max(1.0, float(self.keys[k].mask.sum()))
+
+    def _lost(self, mask: np.ndarray, area: float) -> bool:
+        """Whether a mask holds under ``lost_frac`` of ``area``: the area of the key frame a
+        pass carried it from, or for a frame's state the smaller of its neighbouring keys'
+        (its own, on a key frame). Measured against frame 0's area instead, a subject that
+        was far smaller on a later frame (a rider riding away) was lost there even on a
+        frame the artist had painted it on, and the frame stayed empty."""
+        return float(mask.sum()) < self.s.lost_frac * area
 
     # -- key frames -------------------------------------------------------------------------
     def _subject_side(self, first: np.ndarray) -> float:
@@ -443,11 +449,22 @@ class RotoSegmentation:
         """Cut a corrected frame: its strokes are sure labels, and the prior around them takes
         their side (a stroke painted over a wrong region turns the region, not a line); the
         cut is kept within ``stroke_zone_frac`` of the subject's side around them, the prior
-        elsewhere."""
+        elsewhere.
+
+        On a frame where the subject was lost (an empty prior), a subject stroke says where
+        it is: the frame is cut as a first frame is (:func:`cut_first`), from a box of the
+        nearest key's size around the strokes (:meth:`_box_around`). Cut from the strokes'
+        band alone, it took little more than the band: on 20 lost frames of 9 DAVIS clips
+        (one scripted subject stroke each), 0.388 IoU, now 0.507 (motocross-jump 0.04 ->
+        0.13, breakdance 0.31 -> 0.59, car-shadow 0.34 -> 0.80; drift-chicane's small car
+        0.85 -> 0.72, the box's road taken with it)."""
         small = self.work.shrink(check_frame(self.source[t]))
         subject, background = self._stroke_masks(t)
         prior = prior.astype(np.float32)
         before = (prior > 0.5).astype(np.uint8)
+        if subject is not None and not before.any():
+            return Cut(cut_first(small, self._box_around(t, subject), subject=subject,
+                                 background=background, settings=self.s), 1.0)
         near = np.zeros(prior.shape, np.uint8)
         for label, value in (("subject", 1.0), ("background", 0.0)):
             mine = [sc for sc in self.scribbles if sc.frame == t and sc.label == label]
@@ -464,6 +481,22 @@ class RotoSegmentation:
         _, _, w, h = cv2.boundingRect(before)
         zone = cv2.dilate(near, disk(round(self.s.stroke_zone_frac * max(w, h)))) > 0
         return Cut(np.where(zone, cut.mask, before).astype(np.uint8), 1.0)
+
+    def _box_around(self, t: int, subject: np.ndarray) -> tuple[int, int, int, int]:
+        """A box (working size) around the subject strokes ``subject`` of frame ``t``, as wide
+        and tall as the mask of the key frame nearest ``t`` that holds one grown by a fifth
+        (the strokes' extent at least), clipped to the frame."""
+        held = [k for k in self.keys if k != t and self.keys[k].mask.any()]
+        nearest = min(held, key=lambda k: abs(k - t), default=None)
+        x, y, w, h = cv2.boundingRect(subject.astype(np.uint8))
+        cx, cy = x + w / 2, y + h / 2
+        if nearest is not None:
+            _, _, kw, kh = cv2.boundingRect(self.keys[nearest].mask)
+            w, h = max(w, kw), max(h, kh)
+        rows, cols = subject.shape
+        x0, y0 = max(0, round(cx - 0.6 * w)), max(0, round(cy - 0.6 * h))
+        x1, y1 = min(cols, round(cx + 0.6 * w)), min(rows, round(cy + 0.6 * h))
+        return x0, y0, x1 - x0, y1 - y0
 
     # -- propagation ------------------------------------------------------------------------
     def _repropagate(self, k: int, progress) -> tuple[int, int]:
@@ -535,14 +568,15 @@ class RotoSegmentation:
                   else None)
         prev = grey_prev = models = exposure = None
         gap, found = 0.0, False
+        area = self._key_area(key)
         for t, small, grey in _ahead(frames, nearby):
             if t == key:
                 models = key_colours(small, mask, self.s, self._stroke_masks(t)[1])
                 gap = 0.0 if models is None else models.gap
                 exposure = ExposureTrack(grey, mask, self.s, small)
             else:
-                if models is not None and self._lost(mask):
-                    cut = Cut(find_again(small, models, self.key_area, self.s), 0.0)
+                if models is not None and self._lost(mask, area):
+                    cut = Cut(find_again(small, models, area, self.s), 0.0)
                     found = bool(cut.mask.any())
                 else:
                     cut, shown = self._step(mask, (prev, small), (grey_prev, grey), flow_of,
@@ -656,7 +690,8 @@ class RotoSegmentation:
         g = None if key_frames_only or b >= self.n else self.bwd.get(t)
         if f is None or g is None:
             return f or g or Cut(np.zeros(self.fwd.shape, np.uint8), 0.0)
-        f_lost, g_lost = self._lost(f.mask), self._lost(g.mask)
+        f_lost = self._lost(f.mask, self._key_area(a))
+        g_lost = self._lost(g.mask, self._key_area(b))
         if f_lost != g_lost:
             return g if f_lost else f
         w = self._weight(t, a, b)

@@ -2,9 +2,9 @@
 to keep it in a file and put it back without cutting the clip again (its frames are only
 read, to lay the masks' outlines on their edges).
 
-What a correction needs of the engine is its working size, the key frames' cuts, the masks
-the forward and backward passes carried, and the first cut's area; everything else (the
-inputs: box, rectangles, brush strokes) comes from the project it is put back for.
+What a correction needs of the engine is its working size, the key frames' cuts and the
+masks the forward and backward passes carried; everything else (the inputs: box,
+rectangles, brush strokes) comes from the project it is put back for.
 """
 
 from __future__ import annotations
@@ -27,8 +27,6 @@ class RotoState:
         Frames of the clip.
     work : WorkingSize
         The engine's working size (scale, wh, shape, subject_side).
-    key_area : float
-        The first cut's area in working pixels (what "lost" is measured against).
     keys, fwd, bwd : PackedMasks
         The key frames' cuts, and the masks of the forward and backward passes, at the
         working size.
@@ -42,7 +40,6 @@ class RotoState:
 
     n_frames: int
     work: WorkingSize
-    key_area: float
     keys: PackedMasks
     fwd: PackedMasks
     bwd: PackedMasks
@@ -56,7 +53,7 @@ def roto_state(seg: RotoSegmentation) -> RotoState:
     keys = PackedMasks(seg.fwd.shape)
     for t, cut in seg.keys.items():
         keys.put(t, cut)
-    return RotoState(seg.n, seg.work, seg.key_area, keys, seg.fwd, seg.bwd, seg.still)
+    return RotoState(seg.n, seg.work, keys, seg.fwd, seg.bwd, seg.still)
 
 
 def restore_state(seg: RotoSegmentation, state: RotoState) -> bool:
@@ -68,6 +65,6 @@ def restore_state(seg: RotoSegmentation, state: RotoState) -> bool:
             or set(keys) != {0, *seg.corrected_frames}):
         return False
     seg.keys = {t: cut for t in keys if (cut := state.keys.get(t)) is not None}
-    seg.fwd, seg.bwd, seg.key_area = state.fwd, state.bwd, state.key_area
+    seg.fwd, seg.bwd = state.fwd, state.bwd
     seg.still = state.still
     return True

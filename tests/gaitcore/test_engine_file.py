@@ -241,7 +241,7 @@ def test_fuzzed_engine_files_read_as_none_or_as_masks_that_fit(tmp_path):
     still = StillBackground(rng.integers(0, 256, (12, 16, 3), dtype=np.uint8),
                             rng.random((12, 16)) > 0.2)
     states = tuple(FrameState(t in (2, 3), t == 4, round(t / 5, 3)) for t in range(6))
-    state = RotoState(6, WorkingSize(0.5, (16, 12), (24, 32), 20.0), 40.0, *stores, still,
+    state = RotoState(6, WorkingSize(0.5, (16, 12), (24, 32), 20.0), *stores, still,
                       states)
     valid = tmp_path / "valid" / "p.gaitproj"
     write_engine(valid, "f" * 64, state)

@@ -662,6 +662,40 @@ def test_a_subject_found_again_is_not_lost_again_by_the_gap_it_was_found_with():
     assert all(overlap(seg.mask(t), truth[t]) > 0.9 for t in range(8) if t != 3)
 
 
+def test_a_subject_stroke_on_a_frame_where_the_subject_was_lost_finds_it_there():
+    """A brown animal on grass is cut from its box on frame 0. From frame 5 it stands far off,
+    at a third of its size, where no pass can follow it: frames 5 to 9 are lost. The artist
+    paints one short subject stroke along its body on frame 7: that frame is cut as a first
+    frame is, from a box of the subject's size around the stroke, and holds the whole small
+    animal, legs and all, not just the band of the stroke; it is not lost, though its area is
+    a ninth of frame 0's; and the passes from it carry the small animal to its neighbours."""
+    rng = np.random.default_rng(11)
+    green, brown = np.array([60, 140, 70]), np.array([40, 80, 160])
+    frames, truth = [], []
+    for t in range(10):
+        image = np.clip(rng.normal(green, 10, (150, 220, 3)), 0, 255).astype(np.uint8)
+        animal = np.zeros((150, 220), np.uint8)
+        if t < 5:
+            cx, cy, k = 60 + 2 * t, 60, 1.0
+        else:
+            cx, cy, k = 160 + t, 95, 1 / 3
+        cv2.ellipse(animal, (cx, cy), (round(36 * k), round(16 * k)), 0, 0, 360, 1, -1)
+        for foot in (cx - round(22 * k), cx + round(22 * k)):
+            cv2.line(animal, (foot, cy + round(8 * k)), (foot, cy + round(40 * k)), 1,
+                     max(3, round(8 * k)))
+        image[animal > 0] = np.clip(rng.normal(brown, 10, (int(animal.sum()), 3)), 0, 255)
+        frames.append(image)
+        truth.append(animal > 0)
+    seg = RotoSegmentation(frames, box=padded_box(truth[0]))
+    seg.run()
+    assert all(seg.state(t).lost for t in range(5, 10))
+    seg.correct([Scribble([[163.0, 95.0], [171.0, 95.0]], 2, 7, "subject")])
+    assert not seg.state(7).lost and iou(seg.mask(7), truth[7]) > 0.8
+    assert legs_iou(seg.mask(7), truth[7]) > 0.7
+    assert all(iou(seg.mask(t), truth[t]) > 0.7 for t in (6, 8, 9))
+    assert all(iou(seg.mask(t), truth[t]) > 0.8 for t in range(5))
+
+
 def test_what_moves_unlike_the_ground_is_told_from_it_where_colour_cannot():
     """An animal of the ground's own colours, held still by a panning camera while the ground
     slides 3 pixels a frame, its mask carried 6 pixels wrong: the motion cue says subject on
