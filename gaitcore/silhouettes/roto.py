@@ -28,7 +28,13 @@ from gaitcore.errors import GaitInputError
 from gaitcore.footage.sources import prefetched
 from gaitcore.progress import Progress, report
 from gaitcore.silhouettes.annotations import Rect, Scribble, check_scribbles, check_start
-from gaitcore.silhouettes.colour_model import ColourModel, check_frame, colour_gap, rect_mask
+from gaitcore.silhouettes.colour_model import (
+    ColourModel,
+    ColourTable,
+    check_frame,
+    colour_gap,
+    rect_mask,
+)
 from gaitcore.silhouettes.ground import (
     STILL_FRAMES,
     STILL_LEAST,
@@ -306,7 +312,16 @@ class RotoSegmentation:
                           round(cut.confidence, 3))
 
     def _key_area(self, k: int) -> float:
-        return max(1.0, float(self.keys[k].mask.sum()))
+        """Key frame ``k``'s area, or where its cut is empty (background strokes alone on a
+        lost frame) the nearest key's that holds a mask: the size the subject is searched for
+        at from there."""
+        held = k if self.keys[k].mask.any() else self._nearest_held(k)
+        return 1.0 if held is None else float(self.keys[held].mask.sum())
+
+    def _nearest_held(self, t: int) -> int | None:
+        """The key frame other than ``t`` nearest it whose cut holds a mask (None: none)."""
+        held = [k for k in self.keys if k != t and self.keys[k].mask.any()]
+        return min(held, key=lambda k: abs(k - t), default=None)
 
     def _lost(self, mask: np.ndarray, area: float) -> bool:
         """Whether a mask holds under ``lost_frac`` of ``area``: the area of the key frame a
@@ -486,8 +501,7 @@ class RotoSegmentation:
         """A box (working size) around the subject strokes ``subject`` of frame ``t``, as wide
         and tall as the mask of the key frame nearest ``t`` that holds one grown by a fifth
         (the strokes' extent at least), clipped to the frame."""
-        held = [k for k in self.keys if k != t and self.keys[k].mask.any()]
-        nearest = min(held, key=lambda k: abs(k - t), default=None)
+        nearest = self._nearest_held(t)
         x, y, w, h = cv2.boundingRect(subject.astype(np.uint8))
         cx, cy = x + w / 2, y + h / 2
         if nearest is not None:
@@ -571,7 +585,7 @@ class RotoSegmentation:
         area = self._key_area(key)
         for t, small, grey in _ahead(frames, nearby):
             if t == key:
-                models = key_colours(small, mask, self.s, self._stroke_masks(t)[1])
+                models = self._key_colours(key, small, mask)
                 gap = 0.0 if models is None else models.gap
                 exposure = ExposureTrack(grey, mask, self.s, small)
             else:
@@ -590,6 +604,19 @@ class RotoSegmentation:
             if nearby is not None:
                 nearby.settle(mask)
             prev, grey_prev = small, grey
+
+    def _key_colours(self, key: int, small: np.ndarray, mask: np.ndarray
+                     ) -> ColourTable | None:
+        """The colours a pass from key frame ``key`` judges its frames by: its own, or where
+        its cut is empty (background strokes alone on a frame where the subject was lost) the
+        nearest key's that holds a mask, so that the pass searches for the subject
+        (:func:`find_again`) instead of losing every frame up to the next key."""
+        held = key if mask.any() else self._nearest_held(key)
+        if held is None:
+            return None
+        if held != key:
+            small, mask = self.work.shrink(check_frame(self.source[held])), self.keys[held].mask
+        return key_colours(small, mask, self.s, self._stroke_masks(held)[1])
 
     def _step(self, mask, colours, greys, flow_of, models, exposure: ExposureTrack | None,
               nearby: NearbyGround | None = None, *, gap: float = 0.0, anchor: bool = False
@@ -684,14 +711,17 @@ class RotoSegmentation:
         where the pass from frame 0 had lost the dancer, made frame 8 empty (0.60 from that
         pass) because the pass back from 22 lost her there; over the scripted strokes the
         clip ended at 0.500 (0.586 before any), now 0.609 (0.264 -> 0.638 and 0.489 -> 0.552
-        with the key colours' k-means drawn from seeds 1 and 2).
+        with the key colours' k-means drawn from seeds 1 and 2). A pass from a key frame cut
+        empty (background strokes alone where the subject was lost) counts as lost: it only
+        searched for the subject, and measured against that empty key the other pass looked
+        all drift.
         """
         f = self.fwd.get(t)
         g = None if key_frames_only or b >= self.n else self.bwd.get(t)
         if f is None or g is None:
             return f or g or Cut(np.zeros(self.fwd.shape, np.uint8), 0.0)
-        f_lost = self._lost(f.mask, self._key_area(a))
-        g_lost = self._lost(g.mask, self._key_area(b))
+        f_lost = self._lost(f.mask, self._key_area(a)) or not self.keys[a].mask.any()
+        g_lost = self._lost(g.mask, self._key_area(b)) or not self.keys[b].mask.any()
         if f_lost != g_lost:
             return g if f_lost else f
         w = self._weight(t, a, b)

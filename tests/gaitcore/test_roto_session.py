@@ -94,8 +94,16 @@ def test_the_frames_to_check_are_the_lost_and_the_doubtful_not_the_corrected(tmp
         session.correct(project, [fix])
         fixed = project.with_scribbles((fix,))
         assert 6 not in session.to_check(fixed) and session.states()[6].corrected
+        assert session.to_check(fixed) == ()  # the stroke found the faded body, carried both ways
         assert 6 in session.to_check(project)  # the state before, kept for undo
         assert session.to_check(replace(project, box=Rect(10, 30, 80, 50))) == ()
+    # A background stroke alone on the lost frame: its cut is empty, and the passes from it
+    # search for the body with the nearest key's colours (found again on frame 8, as before).
+    grass = Scribble([[20.0, 100.0], [60.0, 100.0]], 4, 6, "background")
+    with open_frames(folder) as source:
+        session = RotoSession.start(source, project)
+        session.correct(project, [grass])
+        assert session.to_check(project.with_scribbles((grass,))) == (5, 7, 8)
 
 
 def test_cancelled_correction_leaves_the_session_usable(scene_images):
