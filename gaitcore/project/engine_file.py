@@ -56,7 +56,7 @@ from gaitcore.silhouettes.roto_state import RotoState
 from gaitcore.silhouettes.segmentation import SegmentationSettings
 
 ENGINE_FORMAT = "gaitstudio-engine"
-ENGINE_VERSION = 5
+ENGINE_VERSION = 6
 """Bump when the engine's arrays, or what the propagation makes of them, change: a file of
 another version is ignored (the clip is segmented again)."""
 ENGINE_FILE = "engine.json"
