@@ -312,15 +312,22 @@ class RotoSegmentation:
                           round(cut.confidence, 3))
 
     def _key_area(self, k: int) -> float:
-        """Key frame ``k``'s area, or where its cut is empty (background strokes alone on a
-        lost frame) the nearest key's that holds a mask: the size the subject is searched for
-        at from there."""
-        held = k if self.keys[k].mask.any() else self._nearest_held(k)
+        """Key frame ``k``'s area, or where its cut does not hold the subject (:meth:`_holds`)
+        the nearest key's that does: the size the subject is searched for at from there."""
+        held = k if self._holds(k) else self._nearest_held(k)
         return 1.0 if held is None else float(self.keys[held].mask.sum())
 
+    def _holds(self, k: int) -> bool:
+        """Whether key frame ``k``'s cut holds the subject: not empty (background strokes
+        alone where it was lost), nor a speck under ``lost_frac`` squared of frame 0's area
+        (a subject stroke painted where there is no subject)."""
+        area = float(self.keys[k].mask.sum())
+        return area > 0 and area >= self.s.lost_frac ** 2 * float(self.keys[0].mask.sum())
+
     def _nearest_held(self, t: int) -> int | None:
-        """The key frame other than ``t`` nearest it whose cut holds a mask (None: none)."""
-        held = [k for k in self.keys if k != t and self.keys[k].mask.any()]
+        """The key frame other than ``t`` nearest it whose cut holds the subject (None:
+        none)."""
+        held = [k for k in self.keys if k != t and self._holds(k)]
         return min(held, key=lambda k: abs(k - t), default=None)
 
     def _lost(self, mask: np.ndarray, area: float) -> bool:
@@ -608,10 +615,10 @@ class RotoSegmentation:
     def _key_colours(self, key: int, small: np.ndarray, mask: np.ndarray
                      ) -> ColourTable | None:
         """The colours a pass from key frame ``key`` judges its frames by: its own, or where
-        its cut is empty (background strokes alone on a frame where the subject was lost) the
-        nearest key's that holds a mask, so that the pass searches for the subject
-        (:func:`find_again`) instead of losing every frame up to the next key."""
-        held = key if mask.any() else self._nearest_held(key)
+        its cut does not hold the subject (:meth:`_holds`) the nearest key's that does, so
+        that the pass searches for the subject (:func:`find_again`) instead of losing every
+        frame up to the next key."""
+        held = key if self._holds(key) else self._nearest_held(key)
         if held is None:
             return None
         if held != key:
@@ -711,17 +718,16 @@ class RotoSegmentation:
         where the pass from frame 0 had lost the dancer, made frame 8 empty (0.60 from that
         pass) because the pass back from 22 lost her there; over the scripted strokes the
         clip ended at 0.500 (0.586 before any), now 0.609 (0.264 -> 0.638 and 0.489 -> 0.552
-        with the key colours' k-means drawn from seeds 1 and 2). A pass from a key frame cut
-        empty (background strokes alone where the subject was lost) counts as lost: it only
-        searched for the subject, and measured against that empty key the other pass looked
-        all drift.
+        with the key colours' k-means drawn from seeds 1 and 2). A pass from a key frame whose
+        cut does not hold the subject (:meth:`_holds`) counts as lost: it only searched for
+        the subject, and measured against that key the other pass looked all drift.
         """
         f = self.fwd.get(t)
         g = None if key_frames_only or b >= self.n else self.bwd.get(t)
         if f is None or g is None:
             return f or g or Cut(np.zeros(self.fwd.shape, np.uint8), 0.0)
-        f_lost = self._lost(f.mask, self._key_area(a)) or not self.keys[a].mask.any()
-        g_lost = self._lost(g.mask, self._key_area(b)) or not self.keys[b].mask.any()
+        f_lost = self._lost(f.mask, self._key_area(a)) or not self._holds(a)
+        g_lost = self._lost(g.mask, self._key_area(b)) or not self._holds(b)
         if f_lost != g_lost:
             return g if f_lost else f
         w = self._weight(t, a, b)

@@ -258,6 +258,10 @@ def test_a_subject_that_leaves_the_frame_is_flagged_lost():
     seg.run()
     assert [seg.state(t).lost for t in range(14)] == [t >= 8 for t in range(14)]
     assert [bool(seg.mask(t).any()) for t in range(14)] == [t < 8 for t in range(14)]
+    # A subject stroke where there is no subject (a slip of the brush on the grass) cuts a
+    # speck: the frame, and those carried from it, stay lost.
+    seg.correct([Scribble([[60.0, 50.0], [61.0, 50.0]], 1, 10, "subject")])
+    assert [seg.state(t).lost for t in range(14)] == [t >= 8 for t in range(14)]
 
 
 @pytest.mark.parametrize(("data", "match"), [
