@@ -33,6 +33,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -377,6 +378,11 @@ class Cut:
 
     mask: np.ndarray
     confidence: float
+
+    @cached_property
+    def area(self) -> int:
+        """The mask's pixels, counted once."""
+        return cv2.countNonZero(self.mask)
 
 
 def make_flow(settings: PropagationSettings) -> cv2.DISOpticalFlow:

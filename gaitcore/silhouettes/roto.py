@@ -314,15 +314,20 @@ class RotoSegmentation:
     def _key_area(self, k: int) -> float:
         """Key frame ``k``'s area, or where its cut does not hold the subject (:meth:`_holds`)
         the nearest key's that does: the size the subject is searched for at from there."""
-        held = k if self._holds(k) else self._nearest_held(k)
-        return 1.0 if held is None else float(self.keys[held].mask.sum())
+        held = self._holding(k)
+        return 1.0 if held is None else float(self.keys[held].area)
+
+    def _holding(self, k: int) -> int | None:
+        """Key frame ``k`` when its cut holds the subject (:meth:`_holds`), else the nearest
+        key that does (None: none)."""
+        return k if self._holds(k) else self._nearest_held(k)
 
     def _holds(self, k: int) -> bool:
         """Whether key frame ``k``'s cut holds the subject: not empty (background strokes
         alone where it was lost), nor a speck under ``lost_frac`` squared of frame 0's area
         (a subject stroke painted where there is no subject)."""
-        area = float(self.keys[k].mask.sum())
-        return area > 0 and area >= self.s.lost_frac ** 2 * float(self.keys[0].mask.sum())
+        area = self.keys[k].area
+        return area > 0 and area >= self.s.lost_frac ** 2 * self.keys[0].area
 
     def _nearest_held(self, t: int) -> int | None:
         """The key frame other than ``t`` nearest it whose cut holds the subject (None:
@@ -618,7 +623,7 @@ class RotoSegmentation:
         its cut does not hold the subject (:meth:`_holds`) the nearest key's that does, so
         that the pass searches for the subject (:func:`find_again`) instead of losing every
         frame up to the next key."""
-        held = key if self._holds(key) else self._nearest_held(key)
+        held = self._holding(key)
         if held is None:
             return None
         if held != key:
@@ -726,8 +731,8 @@ class RotoSegmentation:
         g = None if key_frames_only or b >= self.n else self.bwd.get(t)
         if f is None or g is None:
             return f or g or Cut(np.zeros(self.fwd.shape, np.uint8), 0.0)
-        f_lost = self._lost(f.mask, self._key_area(a)) or not self._holds(a)
-        g_lost = self._lost(g.mask, self._key_area(b)) or not self._holds(b)
+        f_lost = not self._holds(a) or self._lost(f.mask, self._key_area(a))
+        g_lost = not self._holds(b) or self._lost(g.mask, self._key_area(b))
         if f_lost != g_lost:
             return g if f_lost else f
         w = self._weight(t, a, b)
