@@ -39,7 +39,8 @@ def is_mask_folder(path: Path) -> bool:
     if img.ndim == 3:
         if img.shape[2] == 4:
             img = img[:, :, :3]
-        if not (np.array_equal(img[:, :, 0], img[:, :, 1]) and np.array_equal(img[:, :, 0], img[:, :, 2])):
+        if not (np.array_equal(img[:, :, 0], img[:, :, 1])
+                and np.array_equal(img[:, :, 0], img[:, :, 2])):
             return False
         img = img[:, :, 0]
     values = np.unique(img)
@@ -101,7 +102,8 @@ def load_silhouettes(
     """
     source = Path(source)
     if not source.exists():
-        raise GaitInputError(f"{source} does not exist: give a video file, an image folder or a mask folder")
+        raise GaitInputError(f"{source} does not exist: give a video file, an image folder or "
+                             "a mask folder")
     if is_mask_folder(source):
         n = len(list_image_files(source))
         last = n if stop is None else stop

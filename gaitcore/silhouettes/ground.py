@@ -12,7 +12,7 @@ the ground it uncovers. What the ground looks like where the animal stands tells
   running animal uncovers behind it.
 
 Both give per-pixel log-likelihood ratios learnt on the frame itself from the warped mask's sure
-sides (:func:`~gaitcore.silhouettes.propagate.learnt_ratios`), as the motion cue's are.
+sides (:func:`~gaitcore.silhouettes.motion.learnt_ratios`), as the motion cue's are.
 """
 
 from __future__ import annotations
@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from gaitcore.silhouettes.propagate import PropagationSettings, disk, learnt_ratios
+from gaitcore.silhouettes.motion import learnt_ratios
+from gaitcore.silhouettes.propagate import PropagationSettings, disk
 
 STILL_FRAMES = 15
 """Frames sampled evenly across a clip to tell whether its camera held still, and to learn the
@@ -114,8 +115,9 @@ class StillBackground:
         -------
         ndarray of shape (h, w), float32, or None
             Log-likelihood ratios within +-3 (0 where the background is not known), learnt on
-            this frame from the warped mask's sure sides as :func:`motion_ratios`' are; None
-            when the mask has too few sure pixels.
+            this frame from the warped mask's sure sides as
+            :func:`~gaitcore.silhouettes.motion.motion_ratios`' are; None when the mask has
+            too few sure pixels.
 
         Notes
         -----

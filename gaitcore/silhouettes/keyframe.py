@@ -22,12 +22,12 @@ import cv2
 import numpy as np
 
 from gaitcore.silhouettes.colour_model import colour_separation
+from gaitcore.silhouettes.motion import camera_departure
 from gaitcore.silhouettes.propagate import (
     TOUCHING,
     Box,
     Cut,
     PropagationSettings,
-    camera_departure,
     disk,
     overlap,
 )

@@ -12,7 +12,7 @@ is brought to about ``subject_side_px`` pixels, enough to keep thin legs while s
   the flow carried well is not given away to an ambiguous colour; elsewhere it is blurred and
   weak, and colour decides. Colour is helped by motion: what moves unlike the ground (the
   camera's and the ground's motion, a homography fitted to the flow off the mask) is more
-  likely the subject (:func:`motion_ratios`), and by what lies behind the animal
+  likely the subject (:mod:`gaitcore.silhouettes.motion`), and by what lies behind the animal
   (:mod:`gaitcore.silhouettes.ground`): when the camera held still (a tripod shot), what looks
   unlike the clip's background (a planted foot, or a leg of the ground's own colours); when it
   did not (a camera panning after the animal), what looks unlike the ground the frames either
@@ -31,7 +31,6 @@ Key frames (the first one, corrected ones) are cut by :mod:`gaitcore.silhouettes
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
@@ -40,6 +39,15 @@ import numpy as np
 
 from gaitcore.errors import GaitInputError
 from gaitcore.silhouettes.colour_model import ColourTable, colour_gap, learn_colours
+from gaitcore.silhouettes.exposure import (
+    background_level,
+    background_pixels,
+    balance_change,
+    balance_level,
+    exposure_ratio,
+    measurable,
+)
+from gaitcore.silhouettes.motion import motion_ratios
 from gaitcore.silhouettes.tracking import keep_overlapping
 
 _PRESETS = {"ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST,
@@ -442,13 +450,13 @@ class Warp:
         This frame's brightness over the previous one's, at the same points of the scene
         (1 when the camera's exposure held).
     level : float or None
-        This frame's background level in the window (:func:`_background_level`).
+        This frame's background level in the window (:func:`background_level`).
     balance : ndarray of shape (3,)
         This frame's colour balance over the previous one's: the log ratios of its B, G and R
         levels at the same points, less their mean (zeros when the balance held or was not
-        measured; see :func:`_balance`).
+        measured; see :func:`balance_change`).
     balance_level : ndarray of shape (3,) or None
-        The background's colour in the window (:func:`_balance_level`).
+        The background's colour in the window (:func:`balance_level`).
     motion : ndarray of shape (h, w), float32, or None
         The motion cue (:func:`motion_ratios`); None when it could not be learnt.
     """
@@ -490,10 +498,10 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
     came from, so the warped mask has no holes, and thin parts (legs) keep their width.
 
     The exposure is the median ratio of this frame's grey levels to the previous frame's at
-    the background's points the flow pairs (see :func:`_exposure`). DIS matches
+    the background's points the flow pairs (see :func:`exposure_ratio`). DIS matches
     mean-normalised patches, so its flow holds through a change of exposure; the trust
     compares the two frames once the ratio is applied. The change of colour balance is
-    measured the same way, per channel, at the same points (:func:`_balance`).
+    measured the same way, per channel, at the same points (:func:`balance_change`).
     """
     x0, y0, x1, y1 = window(mask, settings)
     a = np.ascontiguousarray(grey[y0:y1, x0:x1])
@@ -507,270 +515,24 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
     prob = cv2.remap(mask[y0:y1, x0:x1].astype(np.float32), map_x, map_y, cv2.INTER_LINEAR,
                      borderMode=cv2.BORDER_CONSTANT, borderValue=0)
     came = cv2.remap(b, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    background = _background(a, prob)
+    background = background_pixels(a, prob)
     grid = (slice(0, None, 2), slice(0, None, 2))  # a quarter of the pixels tell the levels
     levels = grid if a.size >= _MANY_PIXELS else (slice(None), slice(None))
-    exposure = _exposure(came[levels], a[levels],
-                         background[levels] & _measurable(came[levels]), settings)
+    exposure = exposure_ratio(came[levels], a[levels],
+                              background[levels] & measurable(came[levels]), settings)
     residual = cv2.GaussianBlur(np.abs(a - np.float32(exposure) * came), (0, 0), 1.5)
     trust = np.exp(-np.square(residual / settings.trust_grey))
     prob = cv2.GaussianBlur(prob, (0, 0), 1.0)
     warp = Warp(prob, trust, (x0, y0, x1, y1), exposure,
-                _background_level(a[levels], background[levels]),
+                background_level(a[levels], background[levels]),
                 motion=motion_ratios(flow, prob) if settings.motion_weight > 0 else None)
     if colours is None:
         return warp
     here = np.ascontiguousarray(colours[1][y0:y1, x0:x1][grid])
     came_bgr = cv2.remap(np.ascontiguousarray(colours[0][y0:y1, x0:x1]), map_x[grid],
                          map_y[grid], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    return replace(warp, balance=_balance(came_bgr, here, background[grid], settings),
-                   balance_level=_balance_level(here, background[grid]))
-
-
-_MOTION_BINS = 17
-"""Bins of :func:`motion_ratios`: half octaves of the departure from the background's motion,
-from 0.044 pixel (and less) to 16 pixels (and more)."""
-
-
-def camera_departure(flow: np.ndarray, off: np.ndarray, *, step: int, planes: int = 1,
-                     every: int = 1) -> np.ndarray | None:
-    """How far the flow departs from the camera's motion at each pixel, in pixels.
-
-    Parameters
-    ----------
-    flow : ndarray of shape (h, w, 2), float32
-        An optical flow.
-    off : ndarray of shape (h, w), bool
-        The pixels the camera's motion is fitted to (off the subject).
-    step : int
-        They are sampled every ``step`` pixels each way.
-    planes : int
-        Up to this many homographies (a far and a near plane of the scene), each fitted by
-        RANSAC to the samples the ones before left out; a pixel departs from the closest.
-    every : int
-        The departure is computed on every ``every`` pixels each way.
-
-    Returns
-    -------
-    ndarray of shape (ceil(h / every), ceil(w / every)), float32, or None
-        None when fewer than 32 pixels are sampled, or no homography explains 15% of them.
-    """
-    ys, xs = np.nonzero(off[::step, ::step])
-    ys, xs = ys * step, xs * step
-    src = np.stack([xs, ys], -1).astype(np.float32)
-    dst = src + flow[ys, xs]
-    sampled = len(src)
-    gy, gx = np.mgrid[0 : flow.shape[0] : every, 0 : flow.shape[1] : every].astype(np.float32)
-    seen = flow[::every, ::every]
-    best = None
-    for _ in range(planes):
-        if len(src) < 32:
-            break
-        homography, inliers = cv2.findHomography(src, dst, cv2.RANSAC, 1.0)
-        if homography is None or inliers.sum() < 0.15 * sampled:
-            break
-        h = homography.astype(np.float32)
-        z = h[2, 0] * gx + h[2, 1] * gy + h[2, 2]
-        dx = seen[..., 0] - ((h[0, 0] * gx + h[0, 1] * gy + h[0, 2]) / z - gx)
-        dy = seen[..., 1] - ((h[1, 0] * gx + h[1, 1] * gy + h[1, 2]) / z - gy)
-        departure = np.sqrt(dx * dx + dy * dy)
-        best = departure if best is None else np.minimum(best, departure)
-        src, dst = src[inliers.ravel() == 0], dst[inliers.ravel() == 0]
-    return best
-
-
-def motion_ratios(flow: np.ndarray, prob: np.ndarray) -> np.ndarray | None:
-    """How much more likely each pixel's motion is on the subject than on the background.
-
-    Parameters
-    ----------
-    flow : ndarray of shape (h, w, 2), float32
-        The flow from this frame to the previous one in the window.
-    prob : ndarray of shape (h, w), float32
-        The warped mask in [0, 1].
-
-    Returns
-    -------
-    ndarray of shape (h, w), float32, or None
-        Log-likelihood ratios within +-3; None when either side of the warped mask has too
-        few pixels to learn from, or the background's motion cannot be fitted.
-
-    Notes
-    -----
-    The background's motion (the camera's, with the ground) is a homography fitted to the
-    flow off the warped mask (:func:`camera_departure`, every sixth pixel each way); each
-    pixel's departure from it is binned in half octaves (:data:`_MOTION_BINS`), and the bins'
-    ratio is learnt on this very frame from the warped mask's sure sides (above 0.9, below
-    0.02). It is learnt again every frame because the cue comes and goes: strong while the
-    animal moves across the ground (or the camera pans along it), nothing while it stands
-    still, when the two histograms agree and the ratios are near 0.
-
-    The cue is coarse (a flow is smooth across edges) and, weighed by ``motion_weight``, weak
-    beside the warped mask: it tips the pixels near the mask's edge and where colour is
-    unsure. A foot planted on the ground moves as the ground does, and is tipped towards the
-    background as well.
-    """
-    if np.count_nonzero(prob > 0.9) < 16:
-        return None
-    # Every second pixel each way: the flow is smooth at that scale, and it is 4 times cheaper.
-    departure = camera_departure(flow, prob < 0.02, step=6, every=2)
-    if departure is None:
-        return None
-    bins = np.log2(departure + np.float32(0.05))
-    bins = np.clip((bins + np.float32(4.5)) * 2, 0, _MOTION_BINS - 1).astype(np.intp)
-    return cv2.resize(learnt_ratios(bins, prob[::2, ::2], _MOTION_BINS), prob.shape[::-1],
-                      interpolation=cv2.INTER_LINEAR)
-
-
-def learnt_ratios(bins: np.ndarray, prob: np.ndarray, n_bins: int) -> np.ndarray:
-    """Each pixel's log-likelihood ratio, subject against background, of its bin of a cue,
-    learnt from the warped mask's sure sides (``prob`` above 0.9, below 0.02; one more count
-    in every bin), within +-3."""
-    subject = np.bincount(bins[prob > 0.9], minlength=n_bins) + 1.0
-    background = np.bincount(bins[prob < 0.02], minlength=n_bins) + 1.0
-    ratios = np.log(subject / subject.sum()) - np.log(background / background.sum())
-    return np.clip(ratios, -3, 3).astype(np.float32)[bins]
-
-
-def _measurable(image: np.ndarray) -> np.ndarray:
-    """Pixels (grey, or BGR) neither near black nor clipped in any channel: their level
-    scales with the exposure."""
-    channels = 1 if image.ndim == 2 else image.shape[2]
-    return cv2.inRange(image, (17,) * channels, (239,) * channels) > 0
-
-
-def _background(grey: np.ndarray, subject: np.ndarray) -> np.ndarray:
-    """The pixels whose level measures the exposure: measurable, and off the subject
-    (``subject``: a 0/1 mask, or a warped one in [0, 1])."""
-    return _measurable(grey) & (subject < 0.05)
-
-
-def _log_ratios(before: np.ndarray, after: np.ndarray, ok: np.ndarray,
-                settings: PropagationSettings) -> np.ndarray | None:
-    """How much brighter ``after`` is than ``before`` (grey or BGR, paired by the flow), per
-    channel: the median log ratio at the pixels ``ok`` (the background's, measurable in both),
-    among the pairs that match on every channel once the ratios are applied; None when under
-    a quarter of them match (the flow paired different things: Muybridge's plates, a cut)."""
-    n = int(ok.sum())
-    if n < 64:
-        return None
-    b = before[ok].reshape(n, -1).T.astype(np.float32)
-    a = after[ok].reshape(n, -1).T.astype(np.float32)
-    ratio = np.log(a) - np.log(b)
-    gains = np.exp([np.median(r) for r in ratio]).astype(np.float32)
-    same = (np.abs(a - gains[:, None] * b) < settings.trust_grey).all(axis=0)
-    if same.sum() < max(64, n // 4):
-        return None
-    return np.array([np.median(r[same]) for r in ratio])
-
-
-def _exposure(before: np.ndarray, after: np.ndarray, ok: np.ndarray,
-              settings: PropagationSettings) -> float:
-    """This frame's brightness over the previous one's (grey, :func:`_log_ratios`); 1 when
-    it cannot be told."""
-    log_ratio = _log_ratios(before, after, ok, settings)
-    return 1.0 if log_ratio is None else float(np.exp(log_ratio[0]))
-
-
-def _balance(before: np.ndarray, after: np.ndarray, background: np.ndarray,
-             settings: PropagationSettings) -> np.ndarray:
-    """The change of colour balance from ``before`` to ``after`` (BGR): the log ratios of
-    :func:`_log_ratios` at the ``background`` pixels measurable in both, less their mean;
-    zeros when they cannot be told."""
-    ok = background & _measurable(before) & _measurable(after)
-    log_ratios = _log_ratios(before, after, ok, settings)
-    return np.zeros(3) if log_ratios is None else log_ratios - log_ratios.mean()
-
-
-def _levels(image: np.ndarray, ok: np.ndarray) -> np.ndarray | None:
-    """The median level of each channel (grey: one) at the pixels ``ok``; None when too few."""
-    n = int(ok.sum())
-    if n < 64:
-        return None
-    return np.array([np.median(channel) for channel in image[ok].reshape(n, -1).T])
-
-
-def _background_level(grey: np.ndarray, background: np.ndarray) -> float | None:
-    """Median grey level of the ``background`` pixels (measurable ones); None when too few."""
-    level = _levels(grey, background)
-    return None if level is None else float(level[0])
-
-
-def _balance_level(bgr: np.ndarray, background: np.ndarray) -> np.ndarray | None:
-    """The log of the median B, G and R of the ``background`` pixels measurable in all three,
-    less their mean; None when too few."""
-    levels = _levels(bgr, background & _measurable(bgr))
-    if levels is None:
-        return None
-    log_levels = np.log(levels)
-    return log_levels - log_levels.mean()
-
-
-class ExposureTrack:
-    """A frame's exposure and colour balance over its key frame's, followed along one pass of
-    the propagation.
-
-    Two estimates of each, as a complementary filter: the sum of the frame-to-frame log
-    ratios (:attr:`Warp.exposure`, :attr:`Warp.balance`; exact from frame to frame, but they
-    drift over hundreds of frames) pulled by ``exposure_pull`` towards the background's
-    median level (grey), and its colour (:func:`_balance_level`), against the key frame's
-    (they cannot drift, but the background's content changes them).
-
-    Parameters
-    ----------
-    grey : ndarray of shape (rows, cols), uint8
-        The key frame, grey, at the working size.
-    mask : ndarray of shape (rows, cols), uint8
-        Its 0/1 mask.
-    settings : PropagationSettings
-    colour : ndarray of shape (rows, cols, 3), uint8, optional
-        The key frame in colour (BGR): without it the balance is followed from frame to frame
-        only.
-    """
-
-    def __init__(self, grey: np.ndarray, mask: np.ndarray, settings: PropagationSettings,
-                 colour: np.ndarray | None = None) -> None:
-        self.settings = settings
-        self.level = self.balance_level = None
-        if mask.any():
-            x0, y0, x1, y1 = window(mask, settings)
-            background = _background(grey[y0:y1, x0:x1], mask[y0:y1, x0:x1])
-            self.level = _background_level(grey[y0:y1, x0:x1], background)
-            if colour is not None:
-                self.balance_level = _balance_level(colour[y0:y1, x0:x1], background)
-        self.log_gain = 0.0
-        self.log_balance = np.zeros(3)
-
-    def step(self, warp: Warp) -> np.ndarray:
-        """Follow the exposure and the balance to the frame ``warp`` carried the mask to;
-        returns the B, G and R gains that bring it back to the key frame's."""
-        s = self.settings
-        if not s.match_exposure:
-            return np.ones(3)
-        self.log_gain += float(np.log(warp.exposure))
-        if self.level is not None and warp.level is not None:
-            self.log_gain += s.exposure_pull * (float(np.log(warp.level / self.level))
-                                                - self.log_gain)
-        self.log_balance = self.log_balance + warp.balance
-        if self.balance_level is not None and warp.balance_level is not None:
-            self.log_balance += s.exposure_pull * (warp.balance_level - self.balance_level
-                                                   - self.log_balance)
-        matched = _beyond(self.log_gain, s.exposure_slack) + _beyond(self.log_balance,
-                                                                      s.balance_slack)
-        return np.exp(-matched)
-
-
-def _beyond(log_gain: float | np.ndarray, slack: float) -> np.ndarray:
-    """What of a log gain (or each of several) exceeds ``slack``, with its sign."""
-    return np.sign(log_gain) * np.maximum(0.0, np.abs(log_gain) - slack)
-
-
-def exposed(small: np.ndarray, gains: float | Sequence[float] | np.ndarray) -> np.ndarray:
-    """A frame's colours times ``gains`` (one for all channels, or one each for B, G and R;
-    rounded, saturated): a frame brought back to its key frame's exposure and balance before
-    the key's colours judge it."""
-    gains = np.broadcast_to(np.asarray(gains, np.float64), (3,))
-    return small if (gains == 1.0).all() else cv2.transform(small, np.diag(gains))
+    return replace(warp, balance=balance_change(came_bgr, here, background[grid], settings),
+                   balance_level=balance_level(here, background[grid]))
 
 
 def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: ColourTable,
@@ -908,7 +670,8 @@ def find_again(small: np.ndarray, colours: ColourTable, area: float,
     found = cv2.morphologyEx((evidence > 0).astype(np.uint8), cv2.MORPH_OPEN, disk(1))
     n, labels, stats, _ = cv2.connectedComponentsWithStats(found, connectivity=8)
     sizes = stats[1:, cv2.CC_STAT_AREA].astype(float)
-    ok = np.nonzero((sizes >= settings.max_shrink * area) & (sizes <= settings.max_growth * area))[0]
+    ok = np.nonzero((sizes >= settings.max_shrink * area)
+                    & (sizes <= settings.max_growth * area))[0]
     if not ok.size:
         return np.zeros(found.shape, np.uint8)
     return (labels == 1 + ok[np.argmax(sizes[ok])]).astype(np.uint8)

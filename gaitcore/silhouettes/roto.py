@@ -35,6 +35,7 @@ from gaitcore.silhouettes.colour_model import (
     colour_gap,
     rect_mask,
 )
+from gaitcore.silhouettes.exposure import ExposureTrack, exposed
 from gaitcore.silhouettes.ground import (
     STILL_FRAMES,
     STILL_LEAST,
@@ -53,17 +54,16 @@ from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import (
     TOUCHING,
     Cut,
-    ExposureTrack,
     PropagationSettings,
     WorkingSize,
     disk,
-    exposed,
     find_again,
     fuse_cut,
     key_colours,
     make_flow,
     overlap,
     warp_mask,
+    window,
 )
 from gaitcore.silhouettes.sketch import rasterize_strokes
 from gaitcore.silhouettes.tracking import keep_overlapping
@@ -599,7 +599,7 @@ class RotoSegmentation:
             if t == key:
                 models = self._key_colours(key, small, mask)
                 gap = 0.0 if models is None else models.gap
-                exposure = ExposureTrack(grey, mask, self.s, small)
+                exposure = ExposureTrack(grey, mask, window(mask, self.s), self.s, small)
             else:
                 if models is not None and self._lost(mask, area):
                     cut = Cut(find_again(small, models, area, self.s), 0.0)

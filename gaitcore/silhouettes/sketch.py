@@ -125,8 +125,9 @@ def crop_sketches(
     shape : (rows, cols)
         Frame size.
     margin, max_side, progress
-        As in :func:`gaitcore.silhouettes.tracking.crop_rois` (but ``max_side`` defaults to :data:`~gaitcore.silhouettes.tracking.WORK_SIDE_PX`, the
-        PCA working size, as for segmentation).
+        As in :func:`gaitcore.silhouettes.tracking.crop_rois` (but ``max_side`` defaults to
+        :data:`~gaitcore.silhouettes.tracking.WORK_SIDE_PX`, the PCA working size, as for
+        segmentation).
 
     Returns
     -------

@@ -706,12 +706,8 @@ def test_what_moves_unlike_the_ground_is_told_from_it_where_colour_cannot():
     the animal and background on the ground, and the cut that weighs it finds more of the
     animal than colour alone. When everything moves alike the cue says nothing."""
     from gaitcore.silhouettes.colour_model import learn_colours
-    from gaitcore.silhouettes.propagate import (
-        PropagationSettings,
-        fuse_cut,
-        motion_ratios,
-        overlap,
-    )
+    from gaitcore.silhouettes.motion import motion_ratios
+    from gaitcore.silhouettes.propagate import PropagationSettings, fuse_cut, overlap
 
     rng = np.random.default_rng(5)
     image = cv2.GaussianBlur(rng.integers(100, 140, (120, 160, 3)).astype(np.uint8), (0, 0), 1)
@@ -994,7 +990,7 @@ def test_the_warp_measures_a_change_of_colour_balance():
 
 
 def test_a_frame_is_brought_back_to_its_key_exposure():
-    from gaitcore.silhouettes.propagate import exposed
+    from gaitcore.silhouettes.exposure import exposed
 
     frame = np.array([[[100, 120, 200], [255, 255, 255]]], np.uint8)
     np.testing.assert_array_equal(exposed(frame, 0.5), [[[50, 60, 100], [128, 128, 128]]])
@@ -1010,7 +1006,8 @@ def test_the_exposure_followed_along_a_pass_neither_drifts_nor_matches_small_cha
     photographs) while the background keeps its level: pulled towards that level, the
     followed exposure stays within the slack, so nothing is matched (not pulled, it
     drifts). A frame lit 1.5 times (its background too) is matched, less the slack."""
-    from gaitcore.silhouettes.propagate import ExposureTrack, PropagationSettings, Warp
+    from gaitcore.silhouettes.exposure import ExposureTrack
+    from gaitcore.silhouettes.propagate import PropagationSettings, Warp, window
 
     rng = np.random.default_rng(2)
     grey = rng.integers(60, 200, (120, 160)).astype(np.uint8)
@@ -1019,6 +1016,7 @@ def test_the_exposure_followed_along_a_pass_neither_drifts_nor_matches_small_cha
     settings = PropagationSettings()
     prob = mask.astype(np.float32)
     lit = np.clip(grey * 1.5, 0, 255).astype(np.uint8)
+    around = window(mask, settings)
 
     def warp(ratio: float, frame: np.ndarray) -> Warp:
         background = frame[(mask == 0) & (frame < 240)]
@@ -1027,15 +1025,15 @@ def test_the_exposure_followed_along_a_pass_neither_drifts_nor_matches_small_cha
     def biased(track):
         return np.array([track.step(warp(0.998, grey)) for _ in range(300)])
 
-    assert biased(ExposureTrack(grey, mask, settings)).max() == 1.0
-    drifted = biased(ExposureTrack(grey, mask, PropagationSettings(exposure_pull=0.0)))[-1]
+    assert biased(ExposureTrack(grey, mask, around, settings)).max() == 1.0
+    drifted = biased(ExposureTrack(grey, mask, around, PropagationSettings(exposure_pull=0.0)))[-1]
     assert drifted.min() > 1.5
 
-    track = ExposureTrack(grey, mask, settings)
+    track = ExposureTrack(grey, mask, around, settings)
     gains = track.step(warp(1.5, lit))
     np.testing.assert_allclose(gains, np.exp(-(np.log(1.5) - settings.exposure_slack)),
                                rtol=0.02)
-    off = ExposureTrack(grey, mask, PropagationSettings(match_exposure=False))
+    off = ExposureTrack(grey, mask, around, PropagationSettings(match_exposure=False))
     assert (off.step(warp(1.5, lit)) == 1.0).all()
 
 
@@ -1045,12 +1043,8 @@ def test_the_colour_balance_followed_along_a_pass_neither_drifts_nor_is_left_unm
     (not pulled, it drifts). A frame whose red is 1.1 times and blue 0.9 times (its
     background too) is matched on each channel, less the slack, and its exposure is left
     alone."""
-    from gaitcore.silhouettes.propagate import (
-        ExposureTrack,
-        PropagationSettings,
-        Warp,
-        _balance_level,
-    )
+    from gaitcore.silhouettes.exposure import ExposureTrack, balance_level
+    from gaitcore.silhouettes.propagate import PropagationSettings, Warp, window
 
     rng = np.random.default_rng(2)
     colour = rng.integers(60, 200, (120, 160, 3)).astype(np.uint8)
@@ -1060,19 +1054,21 @@ def test_the_colour_balance_followed_along_a_pass_neither_drifts_nor_is_left_unm
     settings = PropagationSettings()
     prob = mask.astype(np.float32)
     logs = np.log([0.9, 1.0, 1.1])
+    around = window(mask, settings)
     warmer = np.clip(np.rint(colour * np.exp(logs)), 0, 255).astype(np.uint8)
 
     def warp(balance: np.ndarray, frame: np.ndarray) -> Warp:
         return Warp(prob, prob, (0, 0, 160, 120), balance=balance,
-                    balance_level=_balance_level(frame, mask == 0))
+                    balance_level=balance_level(frame, mask == 0))
 
     redder = np.array([-0.00015, -0.00015, 0.0003])
     for pull, kept in ((settings.exposure_pull, True), (0.0, False)):
-        track = ExposureTrack(grey, mask, PropagationSettings(exposure_pull=pull), colour)
+        track = ExposureTrack(grey, mask, around, PropagationSettings(exposure_pull=pull), colour)
         last = [track.step(warp(redder, colour)) for _ in range(300)][-1]
         assert (np.abs(np.log(last)) < 1e-9).all() == kept
 
-    gains = ExposureTrack(grey, mask, settings, colour).step(warp(logs - logs.mean(), warmer))
+    gains = ExposureTrack(grey, mask, around, settings, colour).step(
+        warp(logs - logs.mean(), warmer))
     expected = -(logs - logs.mean())
     expected = np.sign(expected) * (np.abs(expected) - settings.balance_slack)
     np.testing.assert_allclose(np.log(gains), expected, atol=0.01)
