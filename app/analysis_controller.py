@@ -1,10 +1,11 @@
 """Keep the analysis in step with the project, off the GUI thread, latest request wins.
 
-The computations are :mod:`gaitcore.project.steps`' ``analyze`` and ``rekey``. A change of the silhouettes (or of the
-working size) reruns the whole analysis (PCA, diagnosis, keys); a change of the number of
-PCs or keys, of pinned or dropped keys or of switching only reruns the key search on the
-projections already computed. Requests are coalesced for 80 ms (spin boxes) and a newer one
-cancels the running one; a long one (a long clip's PCA) shows its progress with Cancel.
+The computations are :mod:`gaitcore.project.steps`' ``analyze`` and ``rekey``. A change of
+the silhouettes (or of the working size) reruns the whole analysis (PCA, diagnosis, keys); a
+change of the number of PCs or keys, of pinned or dropped keys or of switching only reruns
+the key search on the projections already computed. Requests are coalesced for 80 ms (spin
+boxes) and a newer one cancels the running one; a long one (a long clip's PCA) shows its
+progress with Cancel.
 """
 
 from __future__ import annotations
@@ -42,7 +43,8 @@ class AnalysisController(QObject):
 
     def _on_project(self, project: Project) -> None:
         wanted = (project.silhouettes, project.settings, project.trim)
-        if self._asked is not None and wanted[0] is self._asked[0] and wanted[1:] == self._asked[1:]:
+        if (self._asked is not None and wanted[0] is self._asked[0]
+                and wanted[1:] == self._asked[1:]):
             return
         self._asked = wanted
         if project.silhouettes is None:
@@ -67,8 +69,8 @@ class AnalysisController(QObject):
         if current is not None and self._analysed is not None and (
                 self._analysed[0] is silhouettes and self._analysed[1] == trim
                 and current.settings.max_side_px == settings.max_side_px):
-            job = Job(lambda progress: rekey(current, settings, progress=progress), "Choosing key-images",
-                      unit=None)
+            job = Job(lambda progress: rekey(current, settings, progress=progress),
+                      "Choosing key-images", unit=None)
         else:
             job = Job(lambda progress: analyze(silhouettes, settings, progress, trim=trim),
                       "Analysing the clip", unit=None)

@@ -82,7 +82,8 @@ def find_recovery_copies(directory: Path) -> list[RecoveryCopy]:
             continue
         original, saved_at = _read_info(meta)
         found.append(RecoveryCopy(project_file, original,
-                                  saved_at if saved_at is not None else project_file.stat().st_mtime))
+                                  saved_at if saved_at is not None
+                                  else project_file.stat().st_mtime))
     return sorted(found, key=lambda c: -c.saved_at)
 
 

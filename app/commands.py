@@ -42,7 +42,8 @@ class ProjectCommand(QUndoCommand):
         Frame to show on redo and undo.
     """
 
-    def __init__(self, state: AppState, after: Project, text: str, frame: int | None = None) -> None:
+    def __init__(self, state: AppState, after: Project, text: str,
+                 frame: int | None = None) -> None:
         super().__init__(text)
         self._state = state
         self._before = state.project
@@ -161,7 +162,8 @@ class ClearKeyConstraintsCommand(ProjectCommand):
 
     def __init__(self, state: AppState) -> None:
         settings = replace(state.project.settings, pinned=(), forbidden=())
-        super().__init__(state, replace(state.project, settings=settings), "clear pinned and dropped keys")
+        super().__init__(state, replace(state.project, settings=settings),
+                         "clear pinned and dropped keys")
 
 
 class _FieldCommand(ProjectCommand):
@@ -214,7 +216,8 @@ class TrimCommand(ProjectCommand):
 def set_in_mark(state: AppState) -> None:
     """Start the trim at the current frame (I); an out mark before it is dropped."""
     frame, stop = state.frame, state.project.frame_stop
-    state.undo_stack.push(TrimCommand(state, frame, stop if stop is not None and stop > frame else None,
+    state.undo_stack.push(TrimCommand(state, frame,
+                                      stop if stop is not None and stop > frame else None,
                                       f"set the in mark at frame {frame}"))
 
 

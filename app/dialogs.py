@@ -95,7 +95,8 @@ class Asker:
 
     def open_file(self, title: str, file_filter: str) -> Path | None:
         """A file to read, e.g. a pose table or a BVH (None: cancelled)."""
-        path, _ = QFileDialog.getOpenFileName(self._parent, title, "", f"{file_filter};;All files (*)")
+        path, _ = QFileDialog.getOpenFileName(self._parent, title, "",
+                                              f"{file_filter};;All files (*)")
         return Path(path) if path else None
 
     def export_path(self, title: str, suggested: Path, file_filter: str) -> Path | None:
@@ -127,7 +128,8 @@ class Asker:
         """One of ``frames`` (None: cancelled), ``suggested`` (if one of them) preselected."""
         first = suggested if suggested in frames else frames[0]
         if frames == list(range(frames[0], frames[0] + len(frames))):
-            value, ok = QInputDialog.getInt(self._parent, title, "Frame:", first, frames[0], frames[-1])
+            value, ok = QInputDialog.getInt(self._parent, title, "Frame:", first, frames[0],
+                                            frames[-1])
             return value if ok else None
         item, ok = QInputDialog.getItem(self._parent, title, "Frame:", [str(f) for f in frames],
                                         frames.index(first), False)

@@ -74,7 +74,8 @@ class DocumentController(QObject):
             self.messageRaised.emit(source.note)
         if masks:
             self.run(Job(lambda progress: silhouettes_from_masks(path, progress),
-                         "Tracking the masks"), lambda sil: self._set_initial_silhouettes(project, sil))
+                         "Tracking the masks"),
+                     lambda sil: self._set_initial_silhouettes(project, sil))
         return True
 
     def open_project(self, path: Path, *, recovered: RecoveryCopy | None = None) -> bool:

@@ -36,8 +36,8 @@ def export_fps(state: AppState) -> float:
 class ExportController(QObject):
     """Ask where, check that every key is posed, then write the file in a background job."""
 
-    def __init__(self, state: AppState, animation: AnimationController, documents: DocumentController,
-                 parent: QObject | None = None) -> None:
+    def __init__(self, state: AppState, animation: AnimationController,
+                 documents: DocumentController, parent: QObject | None = None) -> None:
         super().__init__(parent)
         self._state = state
         self._animation = animation
@@ -67,7 +67,8 @@ class ExportController(QObject):
         if path is None:
             base = state.path or state.project.footage or Path.cwd() / "untitled"
             suggested = Path(base).with_name(Path(base).stem + "_animation" + suffix)
-            description = EXPORTERS[suffix].description if suffix in EXPORTERS else "MPEG-4 video (*.mp4)"
+            description = (EXPORTERS[suffix].description if suffix in EXPORTERS
+                           else "MPEG-4 video (*.mp4)")
             path = asker.export_path(title, suggested, description)
             if path is None:
                 return None
@@ -85,7 +86,8 @@ class ExportController(QObject):
     def _footage_maps(self, animation):
         """Where the skeleton goes over each exported frame: the artist's footage fit."""
         project, state = self._state.project, self._state
-        start = animation.first_frame + (animation.cycle_start if animation.cycle is not None else 0)
+        start = animation.first_frame + (animation.cycle_start if animation.cycle is not None
+                                         else 0)
         frames = range(start, start + len(animation.exported()[0]))
         if state.source is None:  # masks only: the video shows the crops, skeleton centred
             crops = project.silhouettes.roi.crops
@@ -97,7 +99,8 @@ class ExportController(QObject):
     def _footage_frames(self, animation):
         """An iterator over the frames the exported poses go with, read on the job's thread."""
         project = self._state.project
-        start = animation.first_frame + (animation.cycle_start if animation.cycle is not None else 0)
+        start = animation.first_frame + (animation.cycle_start if animation.cycle is not None
+                                         else 0)
         count = len(animation.exported()[0])
 
         def frames():

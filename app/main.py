@@ -24,8 +24,10 @@ _POLL_MS = 100
 
 
 def _parse(argv: list[str] | None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(prog="gaitstudio", description="Gait Studio: animal gaits from video")
-    p.add_argument("path", nargs="?", type=Path, help="video file, image or mask folder, or .gaitproj")
+    p = argparse.ArgumentParser(prog="gaitstudio",
+                                description="Gait Studio: animal gaits from video")
+    p.add_argument("path", nargs="?", type=Path,
+                   help="video file, image or mask folder, or .gaitproj")
     p.add_argument("--demo", action="store_true", help="open the synthetic canter demo")
     p.add_argument("--screenshot", type=Path, metavar="FILE",
                    help="save the window as an image once loaded, then exit")

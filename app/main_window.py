@@ -82,8 +82,10 @@ class MainWindow(QMainWindow):
         self.runner = JobRunner(self)
         self.loader = FrameLoader(self)
         self.asker = asker or Asker(self)
-        self.autosaver = Autosaver(self.state, recovery_dir or default_recovery_dir(), autosave_ms, self)
-        self.documents = DocumentController(self.state, self.asker, self.runner, self.autosaver, self)
+        self.autosaver = Autosaver(self.state, recovery_dir or default_recovery_dir(), autosave_ms,
+                                   self)
+        self.documents = DocumentController(self.state, self.asker, self.runner, self.autosaver,
+                                            self)
         self.analysis = AnalysisController(self.state, self.runner, self)
         self.player = Player(self.state, self)
         self.posing = PosingController(self.state, self.asker, self.runner, self)
@@ -124,16 +126,20 @@ class MainWindow(QMainWindow):
     def _build_docks(self) -> None:
         """Dock the widgets: timeline and weights below, loop and verdict right, posing left."""
         self.docks = {
-            "timeline": self._dock("Timeline", self.timeline, Qt.DockWidgetArea.BottomDockWidgetArea),
-            "animation": self._dock("Animation weights", self.animation_view, Qt.DockWidgetArea.BottomDockWidgetArea),
-            "pcs": self._dock("PC1 × PC2 and key-images", self.pc_plot, Qt.DockWidgetArea.RightDockWidgetArea),
-            "diagnosis": self._dock("Diagnosis", self.diagnosis, Qt.DockWidgetArea.RightDockWidgetArea,
-                                    scroll=True),
+            "timeline": self._dock("Timeline", self.timeline,
+                                   Qt.DockWidgetArea.BottomDockWidgetArea),
+            "animation": self._dock("Animation weights", self.animation_view,
+                                    Qt.DockWidgetArea.BottomDockWidgetArea),
+            "pcs": self._dock("PC1 × PC2 and key-images", self.pc_plot,
+                              Qt.DockWidgetArea.RightDockWidgetArea),
+            "diagnosis": self._dock("Diagnosis", self.diagnosis,
+                                    Qt.DockWidgetArea.RightDockWidgetArea, scroll=True),
             "posing": self._dock("Posing", self.pose_panel, Qt.DockWidgetArea.LeftDockWidgetArea,
                                  scroll=True),
             "eigen": self._dock("Eigen-images", self.eigen, Qt.DockWidgetArea.LeftDockWidgetArea),
         }
-        self.splitDockWidget(self.docks["timeline"], self.docks["animation"], Qt.Orientation.Vertical)
+        self.splitDockWidget(self.docks["timeline"], self.docks["animation"],
+                             Qt.Orientation.Vertical)
         # The loop and the verdict are read together: one above the other, never tabbed.
         self.splitDockWidget(self.docks["pcs"], self.docks["diagnosis"], Qt.Orientation.Vertical)
         self.tabifyDockWidget(self.docks["posing"], self.docks["eigen"])
@@ -152,10 +158,13 @@ class MainWindow(QMainWindow):
     def _set_default_sizes(self) -> None:
         """The layout of a first start (a remembered one replaces it)."""
         self.resize(1500, 950)
-        self.resizeDocks([self.docks["posing"], self.docks["pcs"]], [280, 330], Qt.Orientation.Horizontal)
+        self.resizeDocks([self.docks["posing"], self.docks["pcs"]], [280, 330],
+                         Qt.Orientation.Horizontal)
         self.views.setSizes([380, 620])  # the rig over the footage gets the larger pane
-        self.resizeDocks([self.docks["timeline"], self.docks["animation"]], [70, 170], Qt.Orientation.Vertical)
-        self.resizeDocks([self.docks["pcs"], self.docks["diagnosis"]], [360, 300], Qt.Orientation.Vertical)
+        self.resizeDocks([self.docks["timeline"], self.docks["animation"]], [70, 170],
+                         Qt.Orientation.Vertical)
+        self.resizeDocks([self.docks["pcs"], self.docks["diagnosis"]], [360, 300],
+                         Qt.Orientation.Vertical)
 
     def _dock(self, title: str, widget: QWidget, area: Qt.DockWidgetArea, *,
               scroll: bool = False) -> QDockWidget:
@@ -216,7 +225,8 @@ class MainWindow(QMainWindow):
                           self.tools.sketch_engine_action])
 
         view = bar.addMenu("&View")
-        for key, flag in (("silhouette", "Silhouette overlay"), ("onion", "Onion skin (previous strokes)")):
+        for key, flag in (("silhouette", "Silhouette overlay"),
+                          ("onion", "Onion skin (previous strokes)")):
             action = view.addAction(flag)
             action.setCheckable(True)
             action.setChecked(True)
@@ -227,7 +237,8 @@ class MainWindow(QMainWindow):
         view.addAction(self.tools.toolbar.toggleViewAction())
 
     def _build_file_menu(self, file: QMenu) -> None:
-        self._action(file, "&Open project or video...", QKeySequence.StandardKey.Open, self.open_dialog)
+        self._action(file, "&Open project or video...", QKeySequence.StandardKey.Open,
+                     self.open_dialog)
         self._action(file, "Open image or &mask folder...", "Ctrl+Shift+O", self.open_folder_dialog)
         self._action(file, "Open &batch summary...", None, self.open_batch_dialog)
         self.recent_menu = file.addMenu("Open &recent")
@@ -238,7 +249,8 @@ class MainWindow(QMainWindow):
         file.addSeparator()
         export = file.addMenu("&Export")
         self.export_actions = {
-            suffix: self._action(export, f"{label}...", None, lambda s=suffix: self.exporter.export(s))
+            suffix: self._action(export, f"{label}...", None,
+                                 lambda s=suffix: self.exporter.export(s))
             for suffix, label in KINDS.items()
         }
         export.addSeparator()
@@ -253,7 +265,8 @@ class MainWindow(QMainWindow):
         posing = self.posing
         self._action(pose, "&Copy pose", "Ctrl+Alt+C", posing.copy)  # Ctrl+Shift+C: copy strokes
         self._action(pose, "&Paste pose", "Ctrl+Alt+V", posing.paste)
-        self._action(pose, "Paste &mirrored pose", "Ctrl+Alt+M", lambda: posing.paste(mirrored=True))
+        self._action(pose, "Paste &mirrored pose", "Ctrl+Alt+M",
+                     lambda: posing.paste(mirrored=True))
         self._action(pose, "M&irror left/right", "Ctrl+M", posing.mirror)
         self._action(pose, "Pose alternate as mirror of its &key", None, posing.mirror_of_key)
         self._action(pose, "&Reset pose", None, lambda: posing.reset(joint_only=False))
@@ -283,7 +296,8 @@ class MainWindow(QMainWindow):
     def _fill_recent(self, files: list[str]) -> None:
         self.recent_menu.clear()
         for f in files:
-            self.recent_menu.addAction(f).triggered.connect(lambda _c=False, p=f: self.open_path(Path(p)))
+            self.recent_menu.addAction(f).triggered.connect(
+                lambda _c=False, p=f: self.open_path(Path(p)))
         self.recent_menu.setEnabled(bool(files))
 
     # -- file actions --------------------------------------------------------------------------
@@ -333,7 +347,8 @@ class MainWindow(QMainWindow):
         state = self.state
         frame_ok = state.source is None or self.frame_view.shown_frame == state.frame
         silhouettes = state.project.silhouettes
-        analysis_ok = silhouettes is None or (state.analysis is not None and not self.analysis.running)
+        analysis_ok = silhouettes is None or (state.analysis is not None
+                                              and not self.analysis.running)
         return frame_ok and analysis_ok and not self.runner.busy and not self.animator.pending
 
     def snapshot(self) -> QPixmap:

@@ -78,7 +78,8 @@ class PosingController(QObject):
         return alternates_in_use(self._state.project, self._state.analysis)
 
     def missing(self) -> tuple[int, ...]:
-        return missing_poses(self._state.project, self._state.analysis, self._state.skeleton.n_channels)
+        return missing_poses(self._state.project, self._state.analysis,
+                             self._state.skeleton.n_channels)
 
     def editable_frame(self) -> int | None:
         """The current frame when it is a frame to pose, else None."""
@@ -94,7 +95,8 @@ class PosingController(QObject):
         return np.array(pose, dtype=float)
 
     def has_clipboard(self) -> bool:
-        return self._clipboard is not None and len(self._clipboard) == self._state.skeleton.n_channels
+        return (self._clipboard is not None
+                and len(self._clipboard) == self._state.skeleton.n_channels)
 
     # -- edits -------------------------------------------------------------------------------
     def set_channel(self, channel: str, value: float) -> None:
@@ -123,7 +125,8 @@ class PosingController(QObject):
         if self.drags_use_library and frame is not None:
             self._drag_library = drag_library(self._state.project, self._state.skeleton, frame)
 
-    def rotate_joint(self, joint: int, base_pose: np.ndarray, axis: np.ndarray, angle_deg: float) -> None:
+    def rotate_joint(self, joint: int, base_pose: np.ndarray, axis: np.ndarray,
+                     angle_deg: float) -> None:
         """Set the current key's pose to ``base_pose`` with ``joint`` turned about world ``axis``.
 
         The turned local rotation is decomposed as R = Rz Rx Ry; channels the joint lacks are
@@ -135,7 +138,8 @@ class PosingController(QObject):
         if frame is None or pose is None:
             return
         name = skeleton.joints[joint].name
-        self._push(frame, pose, f"rotate {name} on frame {frame}", ("drag", frame, name, self._drag_id))
+        self._push(frame, pose, f"rotate {name} on frame {frame}",
+                   ("drag", frame, name, self._drag_id))
 
     def is_draggable_end(self, joint: int) -> bool:
         """True when dragging ``joint`` moves it by IK (a toe, the head's end, the tail's tip)."""
@@ -151,7 +155,8 @@ class PosingController(QObject):
         if frame is None or pose is None:
             return
         name = skeleton.joints[joint].name
-        self._push(frame, pose, f"move {name} on frame {frame}", ("drag", frame, name, self._drag_id))
+        self._push(frame, pose, f"move {name} on frame {frame}",
+                   ("drag", frame, name, self._drag_id))
 
     def set_pose(self, pose: np.ndarray, text: str) -> bool:
         """Replace the current key's whole pose (clamped to the joint limits)."""
@@ -296,7 +301,8 @@ class PosingController(QObject):
 
         def apply(table: PoseTable) -> None:
             if self.editable_frame() != frame:
-                self.messageRaised.emit(f"{path.name}: not imported, frame {frame} is no longer shown")
+                self.messageRaised.emit(f"{path.name}: not imported, frame {frame} is no longer "
+                                        "shown")
                 return
             try:
                 row = choose(table, path)
@@ -410,7 +416,8 @@ class PosingController(QObject):
         if frame is None:
             frames = self.frames()
             self.messageRaised.emit(
-                f"frame {self._state.frame} is not a key-image: go to one of {list(frames)} to pose it"
+                f"frame {self._state.frame} is not a key-image: go to one of {list(frames)} to "
+                "pose it"
                 if frames else "no key-images yet: analyse the clip first")
         return frame
 

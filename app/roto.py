@@ -325,7 +325,8 @@ class RotoController(QObject):
         ``gaitcore segment`` does (the clip is segmented again when the session was lost)."""
         state, project, source = self._state, self._state.project, self._state.source
         title = "Export masks"
-        if source is None or project.silhouettes is None or project.silhouettes.origin != "segmented":
+        if (source is None or project.silhouettes is None
+                or project.silhouettes.origin != "segmented"):
             self._documents.asker.error(title, "segment the clip first (Tools > Segment clip); "
                                         "nothing was exported")
             return None

@@ -87,7 +87,8 @@ class ToolsController(QObject):
         self.sketch_engine_action = self._action("Propagate this frame's sketch with the "
                                                  "segmentation", "Ctrl+Shift+G",
                                                  self.roto.propagate_sketch)
-        for action in (self.segment_action, self.copy_action, self.propagate_action, self.sketch_action):
+        for action in (self.segment_action, self.copy_action, self.propagate_action,
+                       self.sketch_action):
             self.toolbar.addAction(action)
 
     def _action(self, text: str, shortcut: str, slot) -> QAction:
@@ -130,7 +131,8 @@ class ToolsController(QObject):
 
     def propagate(self) -> Job | None:
         """Move the previous frame's strokes onto this frame by optical flow (background job)."""
-        state, project, source, frame = self._state, self._state.project, self._state.source, self._state.frame
+        state, project, source, frame = (self._state, self._state.project, self._state.source,
+                                         self._state.frame)
         if source is None or frame == 0 or not project.strokes_on(frame - 1):
             self._documents.messageRaised.emit("the previous frame has no strokes to propagate")
             return None

@@ -70,7 +70,8 @@ def speed_up() -> Section:
              f"{base_total / total:.2f}x", f"{base_tasks / tasks:.2f}x"]
             for n, (total, tasks, cpu, usable) in runs.items()]
     return Section(
-        title=f"gaitcore batch: {len(clips)} colour clips of {N_FRAMES} frames, 1 vs 2 worker processes",
+        title=f"gaitcore batch: {len(clips)} colour clips of {N_FRAMES} frames, "
+              "1 vs 2 worker processes",
         headers=["workers", "clips", "usable", "total s", "tasks s", "workers' CPU s",
                  "speed-up (total)", "speed-up (tasks)"],
         rows=rows,
@@ -79,7 +80,9 @@ def speed_up() -> Section:
             "'total' includes starting and closing the cluster; 'tasks' starts once it is up.",
             "'workers' CPU s': CPU time of the worker processes; equal in both runs means that "
             "the work splits without overhead, so on an idle machine 2 workers approach 2x.",
-            "Target: speed-up >= 1.7x with 2 workers on a 2-core machine (measured on a quiet machine).",
-            f"Load average when the run started: {load:.1f} (more than ~0.5 means other work shared the cores).",
+            "Target: speed-up >= 1.7x with 2 workers on a 2-core machine "
+            "(measured on a quiet machine).",
+            f"Load average when the run started: {load:.1f} "
+            "(more than ~0.5 means other work shared the cores).",
         ],
     )

@@ -102,8 +102,10 @@ def scrub_latency(app, window, folder: Path) -> Section:
         title=f"Scrubbing latency on the demo clip ({n} frames {w}x{h}, {len(order)} random jumps)",
         headers=["step", "median ms", "p90 ms", "max ms"],
         rows=rows,
-        notes=[f"target: median scrub <= {TARGET_MS:.0f} ms; measured {median:.1f} ms ({verdict} it)",
-               f"Qt platform: {app.platformName()}; decoding on the loader thread, latest request wins",
+        notes=[f"target: median scrub <= {TARGET_MS:.0f} ms; "
+               f"measured {median:.1f} ms ({verdict} it)",
+               f"Qt platform: {app.platformName()}; "
+               "decoding on the loader thread, latest request wins",
                "scrub includes the queued hand-over from the loader thread and synchronous "
                "repaints of the frame view, PC plot and timeline"],
     )

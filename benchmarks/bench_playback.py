@@ -35,7 +35,8 @@ TARGET_FPS = 24.0
 VIEWPORT = (800, 600)
 PASSES = 2
 REALTIME_S = 4.0
-TITLE = f"Playback of the demo animation beside the footage, 3D viewport {VIEWPORT[0]}x{VIEWPORT[1]}"
+TITLE = ("Playback of the demo animation beside the footage, 3D viewport "
+         f"{VIEWPORT[0]}x{VIEWPORT[1]}")
 HEADERS = ["set-up", "throughput frames/s", "median ms per frame", "p90 ms",
            "real-time playback frames/s (Player at 25)", "3D frames drawn/s"]
 
@@ -163,7 +164,8 @@ def _throughput(window, *, with_3d: bool) -> tuple[list[float], int]:
             window.frame_view.repaint()
             if with_3d:
                 _wait_swapped(window.viewport.gl_view)
-                if f not in keys and not np.array_equal(window.viewport.shown_pose, animation.pose_at(f)):
+                if f not in keys and not np.array_equal(window.viewport.shown_pose,
+                                                        animation.pose_at(f)):
                     errors += 1
             ms.append((time.perf_counter() - t0) * 1000)
     return ms, errors

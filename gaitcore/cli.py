@@ -41,7 +41,8 @@ def _frame_list(text: str) -> tuple[int, ...]:
     try:
         return tuple(int(v) for v in text.split(",") if v.strip())
     except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a comma-separated list of frames") from None
+        raise argparse.ArgumentTypeError(f"'{text}' is not a comma-separated list of "
+                                         "frames") from None
 
 
 def _range(text: str) -> tuple[float, float]:
@@ -279,7 +280,8 @@ def _int_list(text: str) -> tuple[int, ...]:
     try:
         values = tuple(int(v) for v in text.split(",") if v.strip())
     except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a comma-separated list of numbers") from None
+        raise argparse.ArgumentTypeError(f"'{text}' is not a comma-separated list of "
+                                         "numbers") from None
     if not values:
         raise argparse.ArgumentTypeError("give at least one number")
     return values
@@ -371,7 +373,8 @@ def main(argv: list[str] | None = None) -> int:
         print("gaitcore: interrupted", file=sys.stderr)
         return 130
     except OSError as exc:
-        print(f"gaitcore: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr)
+        print(f"gaitcore: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "),
+              file=sys.stderr)
         return 2
     except Exception as exc:  # noqa: BLE001 - a bug must still end in one line, not a traceback
         if os.environ.get("GAITCORE_TRACEBACK"):

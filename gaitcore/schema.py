@@ -379,8 +379,10 @@ def describe(value: Any) -> str:
         kind = "an object" if isinstance(value, dict) else "a list"
         return f"{kind} of {len(value)} element(s)"
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**15:
-        return f"an integer of {len(str(abs(value))) if abs(value) < 10**4000 else 'thousands of'} digits"
-    text = json.dumps(value) if not isinstance(value, float) or math.isfinite(value) else repr(value)
+        return ("an integer of "
+                f"{len(str(abs(value))) if abs(value) < 10**4000 else 'thousands of'} digits")
+    text = (json.dumps(value) if not isinstance(value, float) or math.isfinite(value)
+            else repr(value))
     return text if len(text) <= 40 else text[:37] + "..."
 
 

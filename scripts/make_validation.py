@@ -77,12 +77,14 @@ def _exports_section() -> list[str]:
                         f"{f.lowest_raw_cm:.2f} / {f.lowest_clean_cm:.2f}",
                         f"{f.slip_raw_cm:.2f} / {f.slip_clean_cm:.2f}",
                         "met" if ok else "missed"))
-    out += ["", "Acceptance: no foot below -0.5 cm, stance slip at most 1 cm per frame, angle error",
+    out += ["",
+            "Acceptance: no foot below -0.5 cm, stance slip at most 1 cm per frame, angle error",
             "at most 0.3 deg worse than without the clean-up. The synthetic hooves are planted",
             "in the side view only; as the trunk rolls and yaws the true hooves slide sideways",
             "by up to 2.5 cm a frame, which the clean-up removes along with the interpolation's",
             "skating.", "",
-            _row("gait", "root as interpolated: largest step back (cm)", "forward: speed vs truth (%)",
+            _row("gait", "root as interpolated: largest step back (cm)",
+                 "forward: speed vs truth (%)",
                  "forward: spread of steps (%)", "in-place loop: mean velocity (cm/frame)",
                  "loop: closing frame vs first (cm)"), _row(*["---"] * 6)]
     for f in figures:
@@ -140,7 +142,8 @@ def _headline(results) -> list[str]:
         "",
         "## Error with 4 keys and 2 PCs (the paper's recommended setting)",
         "",
-        _row("gait", "4 keys, 2 PCs (deg)", "best of grid (deg)", "switching 4+4 (deg)", "acceptance"),
+        _row("gait", "4 keys, 2 PCs (deg)", "best of grid (deg)", "switching 4+4 (deg)",
+             "acceptance"),
         _row("---", "---", "---", "---", "---"),
     ]
     for gait, ev in results.items():
@@ -148,10 +151,12 @@ def _headline(results) -> list[str]:
         best = min((x for x in ev.grid if not x.switching), key=lambda x: x.mean_deg)
         sw = ev.cell(2, 4, switching=True) if gait in ("walk", "trot") else None
         if gait in ("canter", "gallop"):
-            target = "<= 2.0: " + ("met" if c.mean_deg <= 2.0 else f"missed by {c.mean_deg - 2.0:.1f}")
+            target = "<= 2.0: " + ("met" if c.mean_deg <= 2.0
+                                   else f"missed by {c.mean_deg - 2.0:.1f}")
         elif gait == "walk":
             ok = sw.mean_deg <= 3.0 and sw.mean_deg <= 0.5 * c.mean_deg
-            target = f"switching <= 3.0 and <= half of {c.mean_deg:.2f}: " + ("met" if ok else "missed")
+            target = (f"switching <= 3.0 and <= half of {c.mean_deg:.2f}: "
+                      + ("met" if ok else "missed"))
         else:
             target = "(none)"
         out.append(_row(gait, f"{c.mean_deg:.2f} ({c.std_deg:.2f})",
@@ -207,7 +212,8 @@ def _floors(results) -> list[str]:
         "markers: \"Two-dimensional kinematics of the flat-walking Tennessee Walking Horse",
         "yearling\"); ours are of the same order, some larger, some smaller. We found no measured",
         "canter or gallop ranges to compare with. Scaling every angle by s scales the floor by s,",
-        f"so reaching 2.0 deg on the canter would need its angles scaled by at most {2.0 / floors['canter', 4].lower_deg:.2f}"
+        "so reaching 2.0 deg on the canter would need its angles scaled by at most "
+        f"{2.0 / floors['canter', 4].lower_deg:.2f}"
         " (proven) and",
         f"probably by about {2.0 / floors['canter', 4].achieved_deg:.2f} (best set found).",
         "",
@@ -234,9 +240,11 @@ def _grids(results) -> list[str]:
         for m in sorted({c.keys for c in ev.grid}):
             out.append(_row(m, *[f"{ev.cell(p, m).mean_deg:.2f}" for p in pcs]))
             if any(c.switching and c.keys == m for c in ev.grid):
-                out.append(_row(f"{m}+{m} switching", *[f"{ev.cell(p, m, switching=True).mean_deg:.2f}" for p in pcs]))
+                out.append(_row(f"{m}+{m} switching",
+                                *[f"{ev.cell(p, m, switching=True).mean_deg:.2f}" for p in pcs]))
         out.append("")
-    out += ["## Variance share of PC1..PC4 (%)", "", _row("gait", "ours", "paper"), _row("---", "---", "---")]
+    out += ["## Variance share of PC1..PC4 (%)", "", _row("gait", "ours", "paper"),
+            _row("---", "---", "---")]
     for gait, ev in results.items():
         ours = " / ".join(f"{100 * v:.1f}" for v in ev.variance_ratio[:4])
         paper = " / ".join(str(v) for v in PAPER_VARIANCE.get(gait, ())) or "-"
@@ -248,7 +256,8 @@ def _spectra(results) -> list[str]:
     """The spectral diagnosis per gait, and how much of each PC is at the gait frequency."""
     out: list[str] = []
     out += ["", "## Spectral diagnosis r per PC (paper Section 5.2)", "",
-            _row("gait", "ours r1..r5", "paper r1..r5", "period (frames)", "r1, r2 >= 0.6", "r3..r5 <= 0.3"),
+            _row("gait", "ours r1..r5", "paper r1..r5", "period (frames)", "r1, r2 >= 0.6",
+                 "r3..r5 <= 0.3"),
             _row(*["---"] * 6)]
     for gait, ev in results.items():
         r = ev.correlations

@@ -22,7 +22,8 @@ from tests.conftest import ROOT
 pytestmark = pytest.mark.slow
 
 
-def _run(args: list[str], cwd: Path, env: dict, timeout: float = 300) -> subprocess.CompletedProcess:
+def _run(args: list[str], cwd: Path, env: dict,
+         timeout: float = 300) -> subprocess.CompletedProcess:
     out = subprocess.run(args, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
     assert out.returncode == 0, f"{' '.join(map(str, args))} failed:\n{out.stdout}\n{out.stderr}"
     return out
@@ -67,8 +68,10 @@ def test_the_wheel_holds_the_package_and_its_resources(installed):
 
 def test_the_installed_commands_synthesize_analyse_and_show_the_demo(installed):
     base, env = installed
-    _run(["gaitcore", "synth", "--gait", "walk", "--frames", "40", "--out", "clip"], cwd=base, env=env)
-    out = _run(["gaitcore", "analyze", "clip/masks", "--out", "an", "--keys", "3"], cwd=base, env=env)
+    _run(["gaitcore", "synth", "--gait", "walk", "--frames", "40", "--out", "clip"], cwd=base,
+         env=env)
+    out = _run(["gaitcore", "analyze", "clip/masks", "--out", "an", "--keys", "3"], cwd=base,
+               env=env)
     assert "key-images:" in out.stdout and (base / "an" / "analysis.json").is_file()
     if not os.environ.get("DISPLAY"):
         pytest.skip("gaitstudio --demo --screenshot needs an X display (make test runs under Xvfb)")

@@ -1,10 +1,10 @@
 """The animation panel: RBF weights over time (paper Figure 10) and the preview options.
 
 One curve w_i(t) per posed frame (each key a colour, its alternate the same colour dashed)
-and their sum (black, dotted), a vertical line at the current frame, a dot on each curve at its own frame (where it
-is 1). Check boxes drive the preview and the export: band-pass filtered trajectories, clamped
-weights, one looping cycle; they are the project's options (saved with it, each change one
-undo step). Clicking the plot goes to that frame.
+and their sum (black, dotted), a vertical line at the current frame, a dot on each curve at
+its own frame (where it is 1). Check boxes drive the preview and the export: band-pass
+filtered trajectories, clamped weights, one looping cycle; they are the project's options
+(saved with it, each change one undo step). Clicking the plot goes to that frame.
 """
 
 from __future__ import annotations
@@ -42,10 +42,12 @@ class AnimationView(QWidget):
         self.plot.addItem(self.cursor)
         self._curves: list[pg.PlotDataItem] = []
         self.filtered = QCheckBox("band-pass filtered")
-        self.filtered.setToolTip("Drive the animation with the filtered PC trajectories (paper 5.2)")
+        self.filtered.setToolTip("Drive the animation with the filtered PC trajectories "
+                                 "(paper 5.2)")
         self.clamp = QCheckBox(f"clamp weights to [{CLAMP_RANGE[0]:g}, {CLAMP_RANGE[1]:g}]")
         self.loop = QCheckBox("loop one cycle")
-        self.loop.setToolTip("Play and export one gait cycle of the detected period, closed on itself")
+        self.loop.setToolTip("Play and export one gait cycle of the detected period, closed on "
+                             "itself")
         self.status = QLabel()
         self.status.setWordWrap(True)
         options = QHBoxLayout()
@@ -99,8 +101,10 @@ class AnimationView(QWidget):
         keys, alts = list(self._state.analysis.key_frames), list(self._posing.alternates())
         for i, row in enumerate(w.pose_frames):
             frame = first + row
-            pair = keys.index(frame) if frame in keys else alts.index(frame)  # key i and its alternate
-            colour = pg.intColor(pair, hues=max(len(keys), 1), maxHue=300, minValue=120, maxValue=220)
+            # key i and its alternate
+            pair = keys.index(frame) if frame in keys else alts.index(frame)
+            colour = pg.intColor(pair, hues=max(len(keys), 1), maxHue=300, minValue=120,
+                                 maxValue=220)
             style = Qt.PenStyle.DashLine if frame in alts else Qt.PenStyle.SolidLine
             pen = pg.mkPen(colour, width=2, style=style)
             label = f"{'alt' if frame in alts else 'key'} {frame}"
@@ -121,5 +125,6 @@ class AnimationView(QWidget):
 
     def _on_click(self, event) -> None:
         vb = self.plot.getPlotItem().getViewBox()
-        if event.button() == Qt.MouseButton.LeftButton and vb.sceneBoundingRect().contains(event.scenePos()):
+        if (event.button() == Qt.MouseButton.LeftButton
+                and vb.sceneBoundingRect().contains(event.scenePos())):
             self._state.set_frame(round(vb.mapSceneToView(event.scenePos()).x()))

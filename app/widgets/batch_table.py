@@ -113,7 +113,8 @@ class BatchTableDialog(QDialog):
         row = self.row_at(view_row)
         path = row.project_path(self._out_dir)
         if path is None:
-            why = row.error if row.status == "bad row" else "it has not been analysed yet: run the batch again"
+            why = (row.error if row.status == "bad row"
+                   else "it has not been analysed yet: run the batch again")
             self.messageRaised.emit(f"cannot open {row.clip}: {why}")
             return
         self.clipChosen.emit(path)

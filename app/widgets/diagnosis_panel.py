@@ -39,7 +39,8 @@ class DiagnosisPanel(QWidget):
         self.plot.addLegend(offset=(-10, 10))
         self._band = pg.LinearRegionItem(movable=False, brush=pg.mkBrush(255, 200, 0, 50),
                                          pen=pg.mkPen(QColor(200, 150, 0)))
-        self._f0 = pg.InfiniteLine(angle=90, pen=pg.mkPen(QColor(120, 120, 120), style=Qt.PenStyle.DotLine))
+        self._f0 = pg.InfiniteLine(angle=90, pen=pg.mkPen(QColor(120, 120, 120),
+                                                          style=Qt.PenStyle.DotLine))
         self._curves = [self.plot.plot(pen=pg.mkPen(c, width=2), name=f"PC{k + 1}")
                         for k, c in enumerate(PC_COLOURS)]
         self._peak = self.plot.plot(pen=pg.mkPen("k", width=1.5, style=Qt.PenStyle.DashLine),
@@ -105,9 +106,11 @@ class DiagnosisPanel(QWidget):
         if analysis.alternates_note:
             steps += f"<p style='color:#b00000'>{html.escape(analysis.alternates_note)}</p>"
         return (
-            f"<b style='color:{colour}; font-size:14pt'>{html.escape(d.verdict.value.capitalize())}</b>"
+            f"<b style='color:{colour}; font-size:14pt'>"
+            f"{html.escape(d.verdict.value.capitalize())}</b>"
             f"<table cellspacing='6'><tr><td><b>r</b></td>{''.join(cells)}</tr>"
-            f"<tr><td><b>var %</b></td>{''.join(f'<td>{v:.1f}</td>' for v in variance)}</tr></table>"
+            f"<tr><td><b>var %</b></td>"
+            f"{''.join(f'<td>{v:.1f}</td>' for v in variance)}</tr></table>"
             f"Period of PC1: <b>{period}</b>; band {d.band[0]:.3f}–{d.band[1]:.3f} cycles/frame."
             + (f" {lost} frame(s) without a silhouette were interpolated." if lost else "")
             + f" Frames {start} to {stop - 1}."

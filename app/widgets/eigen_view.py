@@ -24,7 +24,8 @@ def grey_pixmap(image: np.ndarray, width: int) -> QPixmap:
     grey = np.ascontiguousarray((np.clip(image, 0.0, 1.0) * 255).astype(np.uint8))
     rows, cols = grey.shape
     qimage = QImage(grey.data, cols, rows, cols, QImage.Format.Format_Grayscale8).copy()
-    return QPixmap.fromImage(qimage).scaledToWidth(width, Qt.TransformationMode.SmoothTransformation)
+    return QPixmap.fromImage(qimage).scaledToWidth(width,
+                                                   Qt.TransformationMode.SmoothTransformation)
 
 
 class EigenImagesView(QWidget):

@@ -46,7 +46,8 @@ def _path_item(points_xy: np.ndarray, width: float, colour: QColor) -> QGraphics
     for x, y in points_xy[1:]:
         path.lineTo(QPointF(x, y))
     item = QGraphicsPathItem(path)
-    pen = QPen(colour, width, Qt.PenStyle.SolidLine, Qt.PenCapStyle.RoundCap, Qt.PenJoinStyle.RoundJoin)
+    pen = QPen(colour, width, Qt.PenStyle.SolidLine, Qt.PenCapStyle.RoundCap,
+               Qt.PenJoinStyle.RoundJoin)
     item.setPen(pen)
     return item
 
@@ -190,7 +191,8 @@ class FrameView(QWidget):
             self._show(frame)
 
     def _on_loaded(self, frame: int, image: np.ndarray) -> None:
-        self._image.setImage(cv2.cvtColor(image, cv2.COLOR_BGR2RGB), autoLevels=False, levels=(0, 255))
+        self._image.setImage(cv2.cvtColor(image, cv2.COLOR_BGR2RGB), autoLevels=False,
+                             levels=(0, 255))
         size = (image.shape[1], image.shape[0])
         if size != self._size:
             self._size = size
@@ -286,7 +288,8 @@ class FrameView(QWidget):
         tool = self.canvas.tool
         subject = tool is Tool.SUBJECT
         if not finished:
-            colour = {Tool.BOX: BOX_COLOUR, Tool.SUBJECT: SUBJECT_COLOUR}.get(tool, BACKGROUND_COLOUR)
+            colour = {Tool.BOX: BOX_COLOUR,
+                      Tool.SUBJECT: SUBJECT_COLOUR}.get(tool, BACKGROUND_COLOUR)
             self._set_live(_rect_item(rect, colour))
             return
         self._clear_live()

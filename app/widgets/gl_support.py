@@ -40,7 +40,8 @@ HEADLIGHT_SHADER = shaders.ShaderProgram("gaitstudio-headlight", [
     """),
 ])
 
-BLEND_KEEP_ALPHA = (GL.GL_SRC_ALPHA, GL.GL_ONE_MINUS_SRC_ALPHA, GL.GL_ONE, GL.GL_ONE_MINUS_SRC_ALPHA)
+BLEND_KEEP_ALPHA = (GL.GL_SRC_ALPHA, GL.GL_ONE_MINUS_SRC_ALPHA, GL.GL_ONE,
+                    GL.GL_ONE_MINUS_SRC_ALPHA)
 """Blend colours by alpha but leave the framebuffer opaque, so that grabbing the window (or
 a compositor) does not show the desktop through translucent items."""
 ON_TOP = {GL.GL_DEPTH_TEST: False, GL.GL_BLEND: True, GL.GL_CULL_FACE: False,

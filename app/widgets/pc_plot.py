@@ -63,7 +63,8 @@ class PCPlotWidget(QWidget):
         self.pcs = QSpinBox(minimum=1, maximum=MAX_PCS, prefix="PCs: ")
         self.keys = QSpinBox(minimum=1, maximum=MAX_KEYS, prefix="keys: ")
         self.switching = QCheckBox("alternates (walk)")
-        self.switching.setToolTip("Propose an alternate per key in the other half-cycle (paper 3.2)")
+        self.switching.setToolTip("Propose an alternate per key in the other half-cycle "
+                                  "(paper 3.2)")
         self.info = QLabel("no analysis yet")
         self.info.setWordWrap(True)
         self.pin = QPushButton("Pin frame")
@@ -116,8 +117,10 @@ class PCPlotWidget(QWidget):
         self._alternates = pg.ScatterPlotItem(size=16, symbol="d", pen=ALT_PEN, brush=None)
         self._keys = pg.ScatterPlotItem(size=18, symbol="o", pen=KEY_PEN, brush=None)
         self._cursor = pg.ScatterPlotItem(size=16, symbol="+", pen=pg.mkPen("r", width=3))
-        self._selected = pg.ScatterPlotItem(size=26, symbol="o", pen=pg.mkPen("r", width=2), brush=None)
-        for item in (self._line, self._points, self._alternates, self._keys, self._selected, self._cursor):
+        self._selected = pg.ScatterPlotItem(size=26, symbol="o", pen=pg.mkPen("r", width=2),
+                                            brush=None)
+        for item in (self._line, self._points, self._alternates, self._keys, self._selected,
+                     self._cursor):
             self.plot.addItem(item)
         self._labels: list[pg.TextItem] = []
         # Markers lie on top of the points and take their clicks: all carry frame numbers.
@@ -165,13 +168,14 @@ class PCPlotWidget(QWidget):
         self._points.setData(x=self._coords[:, 0], y=self._coords[:, 1], brush=brushes,
                              data=self._first + np.arange(n))
         keys = list(analysis.key_frames)  # source frames; the coordinates are rows
-        self._keys.setData(self._coords[analysis.rows(keys), 0], self._coords[analysis.rows(keys), 1],
-                           data=keys)
+        self._keys.setData(self._coords[analysis.rows(keys), 0],
+                           self._coords[analysis.rows(keys), 1], data=keys)
         alts = list(analysis.alternate_frames or ())
         self._alternates.setData(self._coords[analysis.rows(alts), 0],
                                  self._coords[analysis.rows(alts), 1], data=alts)
         for f in keys + alts:
-            label = pg.TextItem(str(f), color=(90, 50, 0) if f in keys else (0, 90, 120), anchor=(-0.3, 1.1))
+            label = pg.TextItem(str(f), color=(90, 50, 0) if f in keys else (0, 90, 120),
+                                anchor=(-0.3, 1.1))
             label.setPos(*self._coords[f - analysis.first_frame])
             self.plot.addItem(label)
             self._labels.append(label)
@@ -253,4 +257,5 @@ class PCPlotWidget(QWidget):
     def _accept_alternates(self) -> None:
         analysis = self._state.analysis
         if analysis is not None and analysis.alternate_frames:
-            self._state.undo_stack.push(AcceptAlternatesCommand(self._state, analysis.alternate_frames))
+            self._state.undo_stack.push(AcceptAlternatesCommand(self._state,
+                                                                analysis.alternate_frames))

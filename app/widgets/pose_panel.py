@@ -32,7 +32,8 @@ from gaitcore.rig.skeleton import CHANNEL_ORDER, Skeleton
 
 ANGLE_RANGE_DEG = 180.0
 TRANSLATION_RANGE_M = 100.0
-LABELS = {"rz": "rz (side view)", "rx": "rx", "ry": "ry", "tx": "tx (m)", "ty": "ty (m)", "tz": "tz (m)"}
+LABELS = {"rz": "rz (side view)", "rx": "rx", "ry": "ry", "tx": "tx (m)", "ty": "ty (m)",
+          "tz": "tz (m)"}
 
 
 EXPAND_ALL_JOINTS = 2_000
@@ -43,7 +44,8 @@ EXPAND_DEPTH = 8
 class PosePanel(QWidget):
     """Numeric posing of the current key-image, bound to :class:`AppState`."""
 
-    def __init__(self, state: AppState, posing: PosingController, parent: QWidget | None = None) -> None:
+    def __init__(self, state: AppState, posing: PosingController,
+                 parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self._state = state
         self._posing = posing
@@ -82,7 +84,8 @@ class PosePanel(QWidget):
         layout.addLayout(form)
         layout.addLayout(grid)
 
-        self.frames.itemClicked.connect(lambda item: state.set_frame(item.data(Qt.ItemDataRole.UserRole)))
+        self.frames.itemClicked.connect(
+            lambda item: state.set_frame(item.data(Qt.ItemDataRole.UserRole)))
         self.joints.currentItemChanged.connect(self._on_joint_clicked)
         state.projectChanged.connect(self.sync)
         state.analysisChanged.connect(self.sync)
@@ -97,7 +100,8 @@ class PosePanel(QWidget):
         actions = [
             ("copy", "Copy", posing.copy), ("paste", "Paste", posing.paste),
             ("paste_mirrored", "Paste mirrored", lambda: posing.paste(mirrored=True)),
-            ("mirror", "Mirror L/R", posing.mirror), ("mirror_key", "Mirror of key", posing.mirror_of_key),
+            ("mirror", "Mirror L/R", posing.mirror),
+            ("mirror_key", "Mirror of key", posing.mirror_of_key),
             ("reset_joint", "Reset joint", lambda: posing.reset(joint_only=True)),
             ("reset_pose", "Reset pose", lambda: posing.reset(joint_only=False)),
             ("import_csv", "Pose from CSV...", posing.import_csv),
@@ -110,7 +114,8 @@ class PosePanel(QWidget):
             button.clicked.connect(lambda _c=False, s=slot: s())
             grid.addWidget(button, i // 2, i % 2)
             self.buttons[key] = button
-        self.buttons["mirror_key"].setToolTip("Pose this alternate as the mirror of its key (walks)")
+        self.buttons["mirror_key"].setToolTip("Pose this alternate as the mirror of its key "
+                                              "(walks)")
         self.buttons["load_rig"].setToolTip("Pose another skeleton; poses are dropped unless its "
                                             "channels are the same")
         return grid
@@ -134,7 +139,8 @@ class PosePanel(QWidget):
         frame = posing.editable_frame()
         if frame is None:
             self.info.setText(f"Frame {state.frame} is not a key-image: go to a frame to pose "
-                              "(below) to pose it" if frames else "No key-images yet: analyse the clip")
+                              "(below) to pose it" if frames
+                              else "No key-images yet: analyse the clip")
         else:
             role = "alternate" if frame in alts else "key"
             done = len(frames) - len(missing)
@@ -183,7 +189,8 @@ class PosePanel(QWidget):
     def _show_joint(self, name: str, frame: int | None) -> None:
         current = self.joints.currentItem()
         if (current.text(0) if current else "") != name:
-            found = self.joints.findItems(name, Qt.MatchFlag.MatchExactly | Qt.MatchFlag.MatchRecursive)
+            found = self.joints.findItems(name,
+                                          Qt.MatchFlag.MatchExactly | Qt.MatchFlag.MatchRecursive)
             with QSignalBlocker(self.joints):
                 self.joints.setCurrentItem(found[0] if found and name else None)
         pose = None if frame is None else self._posing.pose_of(frame)

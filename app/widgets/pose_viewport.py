@@ -174,7 +174,8 @@ class PoseViewport(QWidget):
         self.outline.setToolTip("The silhouette's outline over the footage")
         self.onion = QCheckBox("Onion")
         self.onion.setChecked(True)
-        self.onion.setToolTip("The previous and next posed keys, faint (purple before, amber after)")
+        self.onion.setToolTip("The previous and next posed keys, faint (purple before, amber "
+                              "after)")
         self.bones = QSpinBox()
         self.bones.setRange(0, 100)
         self.bones.setSingleStep(10)
@@ -223,7 +224,8 @@ class PoseViewport(QWidget):
         self.gl_view.frameRequested.connect(self.frame_rig)
         return self.gl_container
 
-    def _connect(self, state: AppState, loader: FrameLoader, animation: AnimationController) -> None:
+    def _connect(self, state: AppState, loader: FrameLoader,
+                 animation: AnimationController) -> None:
         """The state, the loader and the controls drive the view."""
         loader.frameLoaded.connect(self._on_frame_loaded)
         state.frameChanged.connect(self.refresh)
@@ -381,7 +383,8 @@ class PoseViewport(QWidget):
             return
         silhouettes = self._state.project.silhouettes
         if silhouettes is not self._sil[0]:
-            self._sil = (silhouettes, None if silhouettes is None else silhouette_height_px(silhouettes))
+            self._sil = (silhouettes,
+                         None if silhouettes is None else silhouette_height_px(silhouettes))
         index, bgr = self._image
         ref = reference_image(bgr, index, self._extent, silhouettes,
                               fit=self._state.project.footage_fit, height_px=self._sil[1])
@@ -402,7 +405,8 @@ class PoseViewport(QWidget):
     def _show_fit(self, *_changed) -> None:
         """Show the project's footage fit in the controls and on the plane."""
         fit = self._state.project.footage_fit
-        for control, value in ((self.fit_scale, 100 * fit.scale), (self.fit_x, 100 * fit.offset_x_m),
+        for control, value in ((self.fit_scale, 100 * fit.scale),
+                               (self.fit_x, 100 * fit.offset_x_m),
                                (self.fit_y, 100 * fit.offset_y_m), (self.flip, fit.flip)):
             show_value(control, value)
         for part, box in self.part_scales.items():

@@ -173,7 +173,8 @@ class SkeletonGLView(GLViewMixin, QOpenGLWindow):
         """
         self.makeCurrent()
         w, h = max(self.deviceWidth(), 1), max(self.deviceHeight(), 1)
-        fbo = QOpenGLFramebufferObject(w, h, QOpenGLFramebufferObject.Attachment.CombinedDepthStencil)
+        fbo = QOpenGLFramebufferObject(w, h,
+                                       QOpenGLFramebufferObject.Attachment.CombinedDepthStencil)
         try:
             fbo.bind()
             GL.glViewport(0, 0, w, h)
@@ -267,7 +268,8 @@ class SkeletonGLView(GLViewMixin, QOpenGLWindow):
         if segments is not None and len(segments):
             self.outline.setData(pos=np.asarray(segments, float).reshape(-1, 3))
 
-    def set_reference(self, rgba_xy: np.ndarray | None, transform: np.ndarray | None = None) -> None:
+    def set_reference(self, rgba_xy: np.ndarray | None,
+                      transform: np.ndarray | None = None) -> None:
         """Show an image (x, y, RGBA uint8, see GLImageItem) placed by the gaitcore-frame
         ``transform`` (4x4 from image units to metres); None hides it."""
         self.reference.setVisible(rgba_xy is not None)

@@ -86,7 +86,8 @@ class TimelineWidget(QWidget):
         start, stop = self._committed_trim()
         if self._drag is not None:
             side, frame = self._drag
-            start, stop = (min(frame, stop - 1), stop) if side == "in" else (start, max(frame + 1, start + 1))
+            start, stop = ((min(frame, stop - 1), stop) if side == "in"
+                           else (start, max(frame + 1, start + 1)))
         return start, stop
 
     def _committed_trim(self) -> tuple[int, int]:
@@ -101,7 +102,8 @@ class TimelineWidget(QWidget):
         if analysis is None:
             return []
         off = analysis.cycle_offset
-        return [(c.start + off, c.stop + off, c.period_frames, min(c.r1, c.r2)) for c in analysis.cycles]
+        return [(c.start + off, c.stop + off, c.period_frames, min(c.r1, c.r2))
+                for c in analysis.cycles]
 
     def cycle_at(self, x: float) -> tuple[int, int, float, float] | None:
         frame = self.frame_at(x)
@@ -110,7 +112,8 @@ class TimelineWidget(QWidget):
     def trim_to(self, start: int, stop: int, text: str = "trim to a stretch") -> None:
         """Trim to source frames ``start <= f < stop`` (one undo step)."""
         n = self._state.n_frames
-        self._state.undo_stack.push(TrimCommand(self._state, start, None if stop >= n else stop, text))
+        self._state.undo_stack.push(TrimCommand(self._state, start, None if stop >= n else stop,
+                                                text))
 
     def _handle_near(self, x: float) -> str | None:
         start, stop = self.trim_range()
@@ -209,9 +212,11 @@ class TimelineWidget(QWidget):
             p.fillRect(QRectF(self.x_of(f) - width / 2, track.top(), width, track.height()),
                        CHECK_COLOUR)
         for f in lost:
-            p.fillRect(QRectF(self.x_of(f) - width / 2, track.top(), width, track.height()), LOST_COLOUR)
+            p.fillRect(QRectF(self.x_of(f) - width / 2, track.top(), width, track.height()),
+                       LOST_COLOUR)
         for f in project.sketched_frames():
-            p.fillRect(QRectF(self.x_of(f) - width / 2, track.bottom() + 2, width, 4), SKETCH_COLOUR)
+            p.fillRect(QRectF(self.x_of(f) - width / 2, track.bottom() + 2, width, 4),
+                       SKETCH_COLOUR)
         self._paint_corrected(p, track, width)
 
     def _paint_corrected(self, p: QPainter, track: QRectF, width: float) -> None:
@@ -220,7 +225,8 @@ class TimelineWidget(QWidget):
         p.setBrush(CORRECTED_COLOUR)
         for f in self._state.project.corrected_frames():
             x = self.x_of(f)
-            p.fillRect(QRectF(x - max(width, 3.0) / 2, track.top(), max(width, 3.0), track.height()),
+            p.fillRect(QRectF(x - max(width, 3.0) / 2, track.top(), max(width, 3.0),
+                              track.height()),
                        CORRECTED_COLOUR)
             y = track.bottom() + 4  # above the row of steady-gait bars
             p.drawPolygon(QPolygonF([QPointF(x, y - 4), QPointF(x + 3.5, y),
@@ -229,7 +235,8 @@ class TimelineWidget(QWidget):
     def _paint_trim(self, p: QPainter, track: QRectF, n: int) -> None:
         start, stop = self.trim_range()
         left, right = self._edge_x(start), self._edge_x(stop)
-        p.fillRect(QRectF(track.left(), track.top(), left - track.left(), track.height()), OUTSIDE_SHADE)
+        p.fillRect(QRectF(track.left(), track.top(), left - track.left(), track.height()),
+                   OUTSIDE_SHADE)
         p.fillRect(QRectF(right, track.top(), track.right() - right, track.height()), OUTSIDE_SHADE)
         if (start, stop) == (0, n):
             return
@@ -248,7 +255,8 @@ class TimelineWidget(QWidget):
             bar = QRectF(left, top, max(2.0, right - left), _CYCLE_ROW)
             p.fillRect(bar, colour)
             p.setPen(QColor(255, 255, 255))
-            p.drawText(bar.adjusted(3, 0, 0, 0), Qt.AlignmentFlag.AlignVCenter | Qt.AlignmentFlag.AlignLeft,
+            p.drawText(bar.adjusted(3, 0, 0, 0),
+                       Qt.AlignmentFlag.AlignVCenter | Qt.AlignmentFlag.AlignLeft,
                        f"cycle {period:.0f} f, r {r:.2f}")
 
     def _paint_marks(self, p: QPainter, track: QRectF) -> None:
@@ -279,4 +287,5 @@ def _triangle(p: QPainter, x: float, bottom: float, colour: QColor, *, filled: b
     """A small downward triangle whose tip touches the track at ``x``."""
     p.setPen(QPen(colour, 1.5))
     p.setBrush(colour if filled else Qt.BrushStyle.NoBrush)
-    p.drawPolygon(QPolygonF([QPointF(x - 5, bottom - 9), QPointF(x + 5, bottom - 9), QPointF(x, bottom)]))
+    p.drawPolygon(QPolygonF([QPointF(x - 5, bottom - 9), QPointF(x + 5, bottom - 9),
+                             QPointF(x, bottom)]))

@@ -20,7 +20,8 @@ def loop_angle(trajectory: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     trajectory : ndarray of shape (n, c), c >= 2
-        PCA projections, preferably band-pass filtered (see :func:`gaitcore.analysis.spectrum.band_pass`).
+        PCA projections, preferably band-pass filtered (see
+        :func:`gaitcore.analysis.spectrum.band_pass`).
 
     Returns
     -------

@@ -73,7 +73,8 @@ class AnalysisSettings:
 
     def __post_init__(self) -> None:
         if self.pcs < 1:
-            raise GaitInputError(f"the number of principal components must be at least 1, got {self.pcs}")
+            raise GaitInputError(f"the number of principal components must be at least 1, "
+                                 f"got {self.pcs}")
         if self.keys < 1:
             raise GaitInputError(f"the number of key-images must be at least 1, got {self.keys}")
         if self.max_side_px is not None and self.max_side_px < 8:
@@ -228,7 +229,8 @@ def analyze_silhouettes(
         projections=proj,
         lost_frames=tuple(int(t) + first_frame + start for t in np.nonzero(roi.lost)[0]),
         diagnosis=diagnosis,
-        selection=KeySelection(frames=(), condition_number=float("nan"), exact=False, nodes_visited=0),
+        selection=KeySelection(frames=(), condition_number=float("nan"), exact=False,
+                               nodes_visited=0),
         loop_angle=theta,
         first_frame=first_frame + start,
         cycles=cycles,

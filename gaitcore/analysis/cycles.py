@@ -205,7 +205,8 @@ def _features(images: np.ndarray, lost: np.ndarray, side: int) -> np.ndarray:
     for lost frames."""
     imgs = np.asarray(images)
     if imgs.ndim != 3 or 0 in imgs.shape:
-        raise GaitInputError(f"silhouettes must be a stack of images (n, rows, cols), got {imgs.shape}")
+        raise GaitInputError(f"silhouettes must be a stack of images (n, rows, cols), "
+                             f"got {imgs.shape}")
     n, rows, cols = imgs.shape
     scale = min(1.0, side / max(rows, cols))
     size = (max(1, round(cols * scale)), max(1, round(rows * scale)))

@@ -237,7 +237,8 @@ class ImagePCA:
             For each component k: mean - s sqrt(l_k) e_k, mean, mean + s sqrt(l_k) e_k.
         """
         step = scale * np.sqrt(self.eigenvalues)[:, None] * self.components
-        out = np.stack([self.mean - step, np.broadcast_to(self.mean, step.shape), self.mean + step], 1)
+        out = np.stack([self.mean - step, np.broadcast_to(self.mean, step.shape),
+                        self.mean + step], 1)
         return out.reshape(self.n_components, 3, *self.image_shape)
 
 

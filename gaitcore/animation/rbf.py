@@ -84,11 +84,13 @@ class RBFPoseMap:
         if not np.all(np.isfinite(p)):
             raise GaitInputError("key-image coordinates contain NaN or infinity")
         if not np.all(np.isfinite(x)):
-            raise GaitInputError("key poses contain NaN or infinity: fill every value of every key pose")
+            raise GaitInputError("key poses contain NaN or infinity: fill every value of every "
+                                 "key pose")
         if not alpha > 0:
             raise GaitInputError(f"kernel width alpha must be positive, got {alpha}")
         if clamp is not None and not clamp[0] < clamp[1]:
-            raise GaitInputError(f"weight clamp range must be (low, high) with low < high, got {clamp}")
+            raise GaitInputError(f"weight clamp range must be (low, high) with low < high, "
+                                 f"got {clamp}")
         d2 = ((p[:, None, :] - p[None, :, :]) ** 2).sum(-1)
         i, j = np.nonzero(np.triu(d2 <= 1e-24, k=1))
         if i.size:

@@ -147,7 +147,8 @@ class SwitchingModel:
             fr = [pose_frames[i] for i in s]
             try:
                 maps.append(
-                    RBFPoseMap.fit(p[fr], np.stack([poses[f] for f in fr]), alpha=alpha, clamp=clamp)
+                    RBFPoseMap.fit(p[fr], np.stack([poses[f] for f in fr]), alpha=alpha,
+                                   clamp=clamp)
                 )
             except GaitInputError as exc:
                 raise GaitInputError(f"switching set of frames {fr}: {exc}") from exc

@@ -50,7 +50,8 @@ def interpolation_weights(
     alpha: float = DEFAULT_ALPHA,
     clamp: tuple[float, float] | None = None,
 ) -> InterpolationWeights:
-    """RBF weights w_i(t) of the posed frames, as :func:`gaitcore.analysis.analyze.animate` uses them.
+    """RBF weights w_i(t) of the posed frames, as :func:`gaitcore.analysis.analyze.animate`
+    uses them.
 
     Parameters
     ----------

@@ -125,9 +125,12 @@ def make_library(root: Path, *, gaits: dict[str, tuple[float, ...]], speeds: tup
                     write_masks(root / name, moving)
                     clips.append(LibraryClip(name, name, "", truth))
     for k in range(still):
-        clips.append(LibraryClip(f"still-{k}", write_masks(root / f"still-{k}", still_blob(n_frames, k)).name))
+        clips.append(LibraryClip(f"still-{k}",
+                                 write_masks(root / f"still-{k}", still_blob(n_frames, k)).name))
     for k in range(jitter):
-        clips.append(LibraryClip(f"jitter-{k}", write_masks(root / f"jitter-{k}", jittering_blob(n_frames, k)).name))
+        clips.append(LibraryClip(f"jitter-{k}",
+                                 write_masks(root / f"jitter-{k}",
+                                             jittering_blob(n_frames, k)).name))
     for k in range(corrupt):
         (root / f"corrupt-{k}.mp4").write_bytes(b"\x00\x00\x00\x18ftypmp42" + bytes(range(256)) * 4)
         clips.append(LibraryClip(f"corrupt-{k}", f"corrupt-{k}.mp4", "10,10,40,30", corrupt=True))

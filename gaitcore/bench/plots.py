@@ -27,7 +27,8 @@ def _pyplot():
     return plt
 
 
-def plot_trajectory(evaluation: Evaluation, path: str | Path, *, pcs: int = 2, keys: int = 4) -> None:
+def plot_trajectory(evaluation: Evaluation, path: str | Path, *, pcs: int = 2,
+                    keys: int = 4) -> None:
     """PC1 x PC2 over time with the selected key-images circled (paper Figure 3)."""
     plt = _pyplot()
     a = evaluation.analyses[(pcs, keys)]

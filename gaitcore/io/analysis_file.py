@@ -28,7 +28,8 @@ MAX_ANALYSIS_BYTES = 2 << 30
 
 
 def analysis_to_dict(analysis: Analysis, *, source: str = "", fps: float | None = None) -> dict:
-    """The JSON-ready content of ``analysis.json`` (the contract in README.md, The gaitcore command)."""
+    """The JSON-ready content of ``analysis.json`` (the contract in README.md, The gaitcore
+    command)."""
     d = analysis.diagnosis
     s = analysis.settings
     pcs = s.pcs

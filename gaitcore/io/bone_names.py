@@ -42,7 +42,8 @@ def bone_names(skeleton: Skeleton, naming: str = "as-is") -> tuple[str, ...]:
     'hind_toe.L'
     """
     if naming not in BONE_NAMINGS:
-        raise GaitInputError(f"unknown bone naming {naming!r}; use one of {', '.join(BONE_NAMINGS)}")
+        raise GaitInputError(f"unknown bone naming {naming!r}; "
+                             f"use one of {', '.join(BONE_NAMINGS)}")
     if naming == "as-is":
         return skeleton.joint_names
     names = tuple(j.name if j.side == "C" else f"{_MARKER.sub('', j.name)}.{j.side}"

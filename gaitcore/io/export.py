@@ -195,7 +195,8 @@ def write_preview_video(path: str | Path, footage_frames: Iterable[np.ndarray],
                              f"{np.shape(footage_from_world)}")
     world = skeleton.forward_kinematics(p)
     if view_height_m is None:
-        view_height_m = 1.4 * float(np.ptp(skeleton.joint_positions(skeleton.rest_pose())[:, 1])) or 2.9
+        view_height_m = (1.4 * float(np.ptp(skeleton.joint_positions(skeleton.rest_pose())[:, 1]))
+                         or 2.9)
     frames = iter(footage_frames)
     first = next(frames, None)
     if first is None:

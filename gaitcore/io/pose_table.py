@@ -91,7 +91,8 @@ def read_pose_table(path: str | Path) -> PoseTable:
     uniq, counts = np.unique(frames, return_counts=True)
     if np.any(counts > 1):
         raise GaitInputError(
-            f"pose file {path}: frame {int(uniq[counts > 1][0])} is listed twice; keep one row per frame"
+            f"pose file {path}: frame {int(uniq[counts > 1][0])} is listed twice; "
+            "keep one row per frame"
         )
     return PoseTable(frames=frames, columns=tuple(header[1:]), values=values[:, 1:])
 

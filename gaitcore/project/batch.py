@@ -119,7 +119,8 @@ class ClipSummary:
             "cycle_start": self.cycle_start, "cycle_stop": self.cycle_stop,
             "frames": self.frames, "error": self.error, "path": self.source,
         }
-        row.update({k: spec.get(k) for k in ("box", "subject", "background", "start", "stop", "fps")})
+        row.update({k: spec.get(k)
+                    for k in ("box", "subject", "background", "start", "stop", "fps")})
         return row
 
     @classmethod
@@ -142,13 +143,15 @@ class ClipSummary:
                 usable=_opt(row.get("usable"), lambda v: v if isinstance(v, bool) else v == "True"),
                 verdict=str(row.get("verdict") or ""), period_frames=_opt(row.get("period"), float),
                 r1=_opt(row.get("r1"), float), r2=_opt(row.get("r2"), float),
-                cycle_start=_opt(row.get("cycle_start"), int), cycle_stop=_opt(row.get("cycle_stop"), int),
+                cycle_start=_opt(row.get("cycle_start"), int),
+                cycle_stop=_opt(row.get("cycle_stop"), int),
                 error=str(row.get("error") or ""),
             )
         except (KeyError, TypeError, ValueError) as exc:
             if isinstance(exc, GaitInputError):
                 raise
-            raise GaitInputError(f"batch summary row {row.get('clip', '?')!r} is malformed ({exc})") from None
+            raise GaitInputError(f"batch summary row {row.get('clip', '?')!r} is malformed "
+                                 f"({exc})") from None
 
 
 def pending(spec: ClipSpec) -> ClipSummary:

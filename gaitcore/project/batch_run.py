@@ -174,7 +174,8 @@ def _client(scheduler: str | None, n_workers: int, say: Callable[[str], None]) -
             client = Client(scheduler, timeout=CONNECT_TIMEOUT_S)
         except (OSError, TimeoutError, ValueError) as exc:
             raise GaitInputError(f"cannot reach the Dask scheduler at {scheduler} ({exc}); "
-                                 "start one with 'dask scheduler' or leave out --scheduler") from None
+                                 "start one with 'dask scheduler' or leave out "
+                                 "--scheduler") from None
         with client:
             n = len(client.scheduler_info().get("workers", {}))
             say(f"scheduler {scheduler}: {n} worker(s); dashboard: {client.dashboard_link}")
@@ -186,7 +187,8 @@ def _client(scheduler: str | None, n_workers: int, say: Callable[[str], None]) -
                                dashboard_address=":0",  # a free port: never 8787 taken
                                silence_logs=logging.ERROR)
     with cluster, Client(cluster) as client:
-        link = cluster.dashboard_link if dashboard else "off (install bokeh to watch the batch in a browser)"
+        link = (cluster.dashboard_link if dashboard
+                else "off (install bokeh to watch the batch in a browser)")
         say(f"local cluster: {n_workers} worker process(es); dashboard: {link}")
         yield client
 

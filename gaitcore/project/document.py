@@ -59,7 +59,8 @@ class Silhouettes:
         if self.origin not in ORIGINS:
             raise GaitInputError(f"unknown silhouette origin {self.origin!r}: use one of {ORIGINS}")
         n = self.roi.crops.shape[0]
-        if self.roi.crops.ndim != 3 or self.roi.centers_xy.shape != (n, 2) or self.roi.lost.shape != (n,):
+        if (self.roi.crops.ndim != 3 or self.roi.centers_xy.shape != (n, 2)
+                or self.roi.lost.shape != (n,)):
             raise GaitInputError(
                 f"silhouette arrays disagree: crops {self.roi.crops.shape}, centres "
                 f"{self.roi.centers_xy.shape}, lost {self.roi.lost.shape}"
@@ -238,7 +239,8 @@ class Project:
     def __post_init__(self) -> None:
         if self.footage is not None:
             object.__setattr__(self, "footage", Path(self.footage))
-        if self.frame_start < 0 or (self.frame_stop is not None and self.frame_stop <= self.frame_start):
+        if self.frame_start < 0 or (self.frame_stop is not None
+                                    and self.frame_stop <= self.frame_start):
             raise GaitInputError(
                 f"frame range {self.frame_start}:{self.frame_stop} is empty or negative: "
                 "choose 0 <= start < stop"
@@ -322,14 +324,16 @@ class Project:
 
     def without_strokes(self, indices: set[int]) -> Project:
         """A copy without the strokes at positions ``indices`` of :attr:`strokes`."""
-        return replace(self, strokes=tuple(s for i, s in enumerate(self.strokes) if i not in indices))
+        return replace(self, strokes=tuple(s for i, s in enumerate(self.strokes)
+                                           if i not in indices))
 
     def without_scribbles(self, indices: Collection[int]) -> Project:
         """A copy without the brush strokes at positions ``indices`` of :attr:`scribbles`."""
         return replace(self, scribbles=tuple(s for i, s in enumerate(self.scribbles)
                                              if i not in indices))
 
-    def with_key_constraint(self, frame: int, *, pinned: bool | None, forbidden: bool | None) -> Project:
+    def with_key_constraint(self, frame: int, *, pinned: bool | None,
+                            forbidden: bool | None) -> Project:
         """A copy where ``frame`` is (or is not) pinned and forbidden; None leaves it as is.
 
         Pinning a frame unforbids it and forbidding unpins it, so the two never overlap.
@@ -360,7 +364,8 @@ class Project:
         else:
             p = np.asarray(pose, dtype=float)
             if p.ndim != 1 or not np.all(np.isfinite(p)):
-                raise GaitInputError(f"a pose must be a flat vector of finite numbers, got shape {p.shape}")
+                raise GaitInputError(f"a pose must be a flat vector of finite numbers, "
+                                     f"got shape {p.shape}")
             poses[int(frame)] = tuple(p.tolist())
         return replace(self, key_poses=poses)
 
@@ -392,7 +397,8 @@ def _hits(strokes: tuple[Stroke, ...], frame: int, xy: tuple[float, float],
     ``xy``."""
     p = np.asarray(xy, dtype=float)
     return {i for i, s in enumerate(strokes)
-            if s.frame == frame and _distance_to_polyline(s.points_xy, p) <= s.width_px / 2 + radius_px}
+            if s.frame == frame
+            and _distance_to_polyline(s.points_xy, p) <= s.width_px / 2 + radius_px}
 
 
 def _distance_to_polyline(points_xy: np.ndarray, p: np.ndarray) -> float:

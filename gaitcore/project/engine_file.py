@@ -19,9 +19,9 @@ project marks its frames to check on the timeline at once (:func:`saved_frames_t
 though the engine itself is put back only by the first correction. A project file without an
 engine (or without its states), or with one another version wrote, reads as before; reading
 the engine never raises: a missing, damaged, stale or foreign file reads as None and the next
-correction segments the clip again (nothing the artist made is in it). Writing is atomic (arrays, then the JSON, then arrays no
-longer named are removed), as :mod:`gaitcore.project.storage` writes projects; the project's
-own files are never touched.
+correction segments the clip again (nothing the artist made is in it). Writing is atomic
+(arrays, then the JSON, then arrays no longer named are removed), as
+:mod:`gaitcore.project.storage` writes projects; the project's own files are never touched.
 
 Why a file of its own rather than an entry of the project JSON: the engine is a cache, so a
 damaged one must never stop the project from loading (``load_project`` refuses damaged

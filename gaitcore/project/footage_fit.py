@@ -4,9 +4,9 @@ The footage is a plane in gaitcore's XY plane, behind the skeleton (negative Z, 
 side camera). Its scale makes the median height of the tracked silhouettes equal to the
 skeleton's rest height, and the silhouette's centre of mass in the shown frame (the ROI
 centre, paper Section 2.2) lands on the skeleton's centre (area-weighted centre of its bone
-ellipsoids seen from the side); the project's :class:`~gaitcore.project.document.FootageFit` corrects
-that placement (scale about the anchor, shift, mirror). Only the part of the frame around the subject is uploaded,
-shrunk to at most :data:`MAX_TEXTURE_SIDE` pixels.
+ellipsoids seen from the side); the project's :class:`~gaitcore.project.document.FootageFit`
+corrects that placement (scale about the anchor, shift, mirror). Only the part of the frame
+around the subject is uploaded, shrunk to at most :data:`MAX_TEXTURE_SIDE` pixels.
 
 :func:`fit_rig` does both fits from the key-image's silhouette: the rig's proportions
 (:mod:`gaitcore.rig.silhouette_fit`) and the footage's size and place that put the
@@ -172,7 +172,8 @@ def _anchor(frame: int, skeleton: SkeletonExtent, silhouettes: Silhouettes | Non
     """The source pixel that lands on the skeleton's centre, the metres per source pixel of
     the automatic placement, and the ROI window of ``frame`` (None when it has none)."""
     cols, rows = size
-    window = silhouettes.window_xywh(frame) if silhouettes is not None and frame < silhouettes.n_frames else None
+    window = (silhouettes.window_xywh(frame)
+              if silhouettes is not None and frame < silhouettes.n_frames else None)
     if height_px is None and silhouettes is not None:
         height_px = silhouette_height_px(silhouettes)
     if window is not None and height_px:

@@ -169,7 +169,8 @@ def _parse_row(header: list[str], cells: list[str], line: int, base: Path) -> Cl
     box = _rects(row.get("box", ""), "box")
     if len(box) > 1:
         raise GaitInputError(f"box {row['box']!r} holds {len(box)} rectangles: give one x,y,w,h")
-    subject, background = _rects(row.get("subject", ""), "subject"), _rects(row.get("background", ""), "background")
+    subject, background = (_rects(row.get("subject", ""), "subject"),
+                           _rects(row.get("background", ""), "background"))
     if box and (subject or background):
         raise GaitInputError("give a box or subject/background rectangles, not both")
     start, stop = _int(row.get("start", ""), "start", 0), _int(row.get("stop", ""), "stop", None)

@@ -310,7 +310,8 @@ def animate_project(project: Project, analysis: Analysis | None, skeleton: Skele
         raise GaitInputError("no key-images yet: analyse the clip first")
     missing = missing_poses(project, analysis, skeleton.n_channels)
     if missing:
-        raise GaitInputError(f"pose every key first (missing: frames {', '.join(map(str, missing))})")
+        raise GaitInputError(f"pose every key first "
+                             f"(missing: frames {', '.join(map(str, missing))})")
     record = AnalysisRecord.from_analysis(analysis)
     alternates = alternates_in_use(project, analysis) or None
     posed = record.key_frames + (alternates or ())

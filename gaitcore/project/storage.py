@@ -154,7 +154,8 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
         arrays = {
             "crops_packed": write_array(side, "crops_packed",
                                         np.packbits(np.asarray(roi.crops, dtype=bool), axis=-1)),
-            "centers_xy": write_array(side, "centers_xy", np.asarray(roi.centers_xy, dtype=np.float64)),
+            "centers_xy": write_array(side, "centers_xy",
+                                      np.asarray(roi.centers_xy, dtype=np.float64)),
             "lost": write_array(side, "lost", np.asarray(roi.lost, dtype=bool)),
         }
         sil = {"origin": project.silhouettes.origin, "scale": float(roi.scale),

@@ -15,8 +15,9 @@ pose the limits allow and says so (:attr:`IKResult.reached`).
 References
 ----------
 S. R. Buss, "Introduction to inverse kinematics with Jacobian transpose, pseudoinverse and
-damped least squares methods", 2004 (the chain solver). R. Tolani, H. Ko, N. Badler, "Real-time inverse kinematics techniques for
-anthropomorphic limbs", Graphical Models 62(5), 2000 (analytic two-bone).
+damped least squares methods", 2004 (the chain solver). R. Tolani, H. Ko, N. Badler,
+"Real-time inverse kinematics techniques for anthropomorphic limbs", Graphical Models 62(5),
+2000 (analytic two-bone).
 """
 
 from __future__ import annotations

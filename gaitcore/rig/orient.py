@@ -102,7 +102,8 @@ def reoriented(skeleton: Skeleton, *, up: str, forward: str) -> Skeleton:
         raise GaitInputError(f"up ({up}) and forward ({forward}) must be different axes")
     turn = np.stack([f, u, np.cross(f, u)])  # rows: the new X, Y, Z in the file's frame
     offsets = skeleton.offsets @ turn.T
-    joints = [replace(j, offset=tuple(float(v) for v in o)) for j, o in zip(skeleton.joints, offsets)]
+    joints = [replace(j, offset=tuple(float(v) for v in o))
+              for j, o in zip(skeleton.joints, offsets)]
     turned = Skeleton(name=skeleton.name, joints=tuple(joints))
     pos = turned.joint_positions(turned.rest_pose())
     root = (0.0, float(pos[0, 1] - pos[:, 1].min()), 0.0)

@@ -75,7 +75,8 @@ def body_parts(skeleton: Skeleton) -> tuple[str, ...]:
     """
     out = []
     for joint in skeleton.joints:
-        parent = None if joint.parent is None else skeleton.joints[skeleton.joint_index(joint.parent)]
+        parent = (None if joint.parent is None
+                  else skeleton.joints[skeleton.joint_index(joint.parent)])
         if joint.side != "C" and parent is not None and parent.side != "C":
             out.append("legs")
             continue
@@ -115,7 +116,8 @@ def proportioned(skeleton: Skeleton, proportions: RigProportions) -> Skeleton:
     scales = np.array([proportions.scale_of(p) for p in body_parts(skeleton)])
     offsets = skeleton.offsets * scales[:, None]
     offsets[0] = skeleton.offsets[0]
-    joints = [replace(j, offset=tuple(float(v) for v in o)) for j, o in zip(skeleton.joints, offsets)]
+    joints = [replace(j, offset=tuple(float(v) for v in o))
+              for j, o in zip(skeleton.joints, offsets)]
     scaled = Skeleton(name=skeleton.name, joints=tuple(joints))
     ground = skeleton.joint_positions(skeleton.rest_pose())[:, 1].min()
     lift = ground - scaled.joint_positions(scaled.rest_pose())[:, 1].min()

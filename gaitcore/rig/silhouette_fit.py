@@ -110,7 +110,8 @@ class _SideView:
         radii[:, 0] = 0.5 * length * BONE_LENGTH_SCALE + self.round
         rot = self.rot[self.joint]
         semi = rot @ (self.axes * radii[:, None, :])  # (B, 3, 3), semi-axes as columns
-        centre = pos[self.joint] + np.einsum("bij,bj->bi", rot, self.axes[:, :, 0]) * length[:, None] / 2
+        centre = (pos[self.joint]
+                  + np.einsum("bij,bj->bi", rot, self.axes[:, :, 0]) * length[:, None] / 2)
         u, s, _ = np.linalg.svd(semi[:, :2])  # the projected ellipses' axes and half-lengths
         xy = centre[:, :2, None] + u @ (s[:, :, None] * self.circle)  # (B, 2, n)
         px = np.stack([origin_px[0] + xy[:, 0] / metres_per_px,
@@ -176,7 +177,8 @@ def fit_proportions(mask: np.ndarray, skeleton: Skeleton, pose: np.ndarray, *,
     def loss(x: np.ndarray) -> float:
         _, scales, mpp, origin = unpack(x)
         cover = view.coverage(scales, mpp, origin, m.shape)
-        overlap = float(np.minimum(cover, target).sum() / max(np.maximum(cover, target).sum(), 1e-9))
+        overlap = float(np.minimum(cover, target).sum()
+                        / max(np.maximum(cover, target).sum(), 1e-9))
         pull = PRIOR_WEIGHT * float(np.sum((x[3:] - prior) ** 2))
         return 1.0 - overlap + pull
 

@@ -55,7 +55,8 @@ def test_open_a_clip_and_scrub(qtbot, window, canter_clip):
     assert window.state.frame == 99
 
 
-def test_draw_rectangles_then_segment_with_cancel_then_for_real(qtbot, window, canter_clip, artifacts_dir):
+def test_draw_rectangles_then_segment_with_cancel_then_for_real(qtbot, window, canter_clip,
+                                                                artifacts_dir):
     window.open_path(canter_clip / "images")
     wait_ready(qtbot, window)
     choose_tool(window, Tool.SUBJECT)
@@ -189,7 +190,8 @@ def test_save_reopen_gives_the_same_project(qtbot, make_window, asker, canter_cl
     assert str(tmp_path / "horse.gaitproj") in second.documents.recent_files()[0]
 
 
-def test_corrupt_and_newer_projects_give_a_message_and_stay_untouched(qtbot, window, asker, tmp_path):
+def test_corrupt_and_newer_projects_give_a_message_and_stay_untouched(qtbot, window, asker,
+                                                                      tmp_path):
     corrupt = tmp_path / "corrupt.gaitproj"
     corrupt.write_text('{"format": "gaitstudio-project", "version": 1, "footage": ')
     newer = tmp_path / "newer.gaitproj"

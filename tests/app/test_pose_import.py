@@ -1,4 +1,5 @@
-"""Importing a pose from a CSV row or a BVH frame, and changing the rig; bad files change nothing."""
+"""Importing a pose from a CSV row or a BVH frame, and changing the rig; bad files change
+nothing."""
 
 from __future__ import annotations
 
@@ -64,12 +65,14 @@ def test_import_a_pose_from_a_csv_row_and_a_bvh_frame(qtbot, posed_window, asker
     assert "ignored 1 channel(s)" in window.statusBar().currentMessage()
     assert "tail5" in window.statusBar().currentMessage()
 
-    write_bvh(tmp_path / "horse.bvh", skeleton, PoseTable(np.arange(2), skeleton.channel_names, wanted))
+    write_bvh(tmp_path / "horse.bvh", skeleton,
+              PoseTable(np.arange(2), skeleton.channel_names, wanted))
     window.state.set_frame(window.state.analysis.key_frames[2])
     asker.chosen_frame = 0
     assert window.posing.import_bvh(tmp_path / "horse.bvh")
     wait_jobs(qtbot, window)
-    np.testing.assert_allclose(window.state.project.key_poses[window.state.frame], wanted[0], atol=1e-4)
+    np.testing.assert_allclose(window.state.project.key_poses[window.state.frame], wanted[0],
+                               atol=1e-4)
     assert not asker.errors
 
 
@@ -89,7 +92,8 @@ BAD_FILES = {
 
 
 @pytest.mark.parametrize("name", sorted(BAD_FILES))
-def test_a_bad_pose_file_gives_a_message_and_changes_nothing(qtbot, posed_window, asker, tmp_path, name):
+def test_a_bad_pose_file_gives_a_message_and_changes_nothing(qtbot, posed_window, asker, tmp_path,
+                                                            name):
     window = posed_window
     text, message = BAD_FILES[name]
     path = tmp_path / name

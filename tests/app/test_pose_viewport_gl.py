@@ -38,7 +38,8 @@ def posed_key(qtbot, window, canter_clip):
     window.state.set_frame(key)
     window.posing.set_pose(true_poses(window.state.skeleton)[key], "set pose")
     qtbot.waitExposed(window)
-    qtbot.waitUntil(lambda: window.frame_view.shown_frame == key and window.viewport._ref is not None)
+    qtbot.waitUntil(lambda: window.frame_view.shown_frame == key
+                    and window.viewport._ref is not None)
     return key
 
 

@@ -74,7 +74,8 @@ def test_saving_again_leaves_only_the_referenced_arrays_and_no_temp_files(tmp_pa
     path = tmp_path / "p.gaitproj"
     project = make_project(None)
     save_project(project, path)
-    other = Silhouettes(RoiClip(np.ones((6, 4, 4), bool), np.zeros((6, 2)), np.zeros(6, bool)), "sketched")
+    other = Silhouettes(RoiClip(np.ones((6, 4, 4), bool), np.zeros((6, 2)), np.zeros(6, bool)),
+                        "sketched")
     save_project(Project(silhouettes=other), path)
     names = sorted(f.name for f in sidecar_dir(path).iterdir())
     assert len(names) == 3 and all(n.endswith(".npy") for n in names)

@@ -22,7 +22,8 @@ def test_part_scales_reach_the_posed_rig_and_the_exported_bvh(qtbot, window, ask
     rig = state.skeleton
     assert rig is proportioned(template, state.project.proportions)
     i = template.joint_index("L_carpus")
-    assert np.linalg.norm(rig.offsets[i]) == pytest.approx(1.15 * np.linalg.norm(template.offsets[i]))
+    assert np.linalg.norm(rig.offsets[i]) == pytest.approx(
+        1.15 * np.linalg.norm(template.offsets[i]))
     truth = true_poses(template)
     for k in state.analysis.key_frames:
         state.set_frame(k)

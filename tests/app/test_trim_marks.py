@@ -50,12 +50,14 @@ def test_in_and_out_marks_undo_and_trim_to_a_stretch(qtbot, window, tmp_path, ar
     trim.trigger()
     assert state.project.trim == (start, stop)
     assert state.undo_stack.undoText() == "trim to a stretch"
-    qtbot.waitUntil(lambda: state.analysis is not None and state.analysis.frame_range == (start, stop),
+    qtbot.waitUntil(lambda: state.analysis is not None
+                    and state.analysis.frame_range == (start, stop),
                     timeout=60_000)
 
     # drag the in mark ten frames right: one undo step
     y = int(timeline._track().center().y())
-    qtbot.mousePress(timeline, Qt.MouseButton.LeftButton, pos=QPoint(int(timeline._edge_x(start)), y))
+    qtbot.mousePress(timeline, Qt.MouseButton.LeftButton,
+                     pos=QPoint(int(timeline._edge_x(start)), y))
     qtbot.mouseMove(timeline, QPoint(int(timeline.x_of(start + 10)), y))
     qtbot.mouseRelease(timeline, Qt.MouseButton.LeftButton,
                        pos=QPoint(int(timeline.x_of(start + 10)), y))

@@ -7,8 +7,9 @@ result), then writes ``OUT_DIR/blender.json`` with what Blender made of them: bo
 frame ranges, the scene's frame rate and, for every bone and frame, its head and tail and its
 rotation from the rest pose, in Gait Studio's axes (Y up). It also renders the middle frame
 with the Workbench engine to ``OUT_DIR/blender.png`` and re-exports the BVH as
-``OUT_DIR/reexported.bvh`` (Blender writes it Z up). Only the standard library and bpy are used: the comparison with
-Gait Studio's own numbers is done by the test, in the project's interpreter.
+``OUT_DIR/reexported.bvh`` (Blender writes it Z up). Only the standard library and bpy are
+used: the comparison with Gait Studio's own numbers is done by the test, in the project's
+interpreter.
 """
 
 import json
@@ -77,7 +78,8 @@ def import_glb(path: str, report: dict) -> None:
     first, last = (int(round(v)) for v in arm.animation_data.action.frame_range)
     skinned = [o for o in scene.objects if o.type == "MESH" and o.find_armature() is arm]
     report["glb"] = {"n_bones": len(arm.data.bones), "action_range": [first, last],
-                     "n_skinned": len(skinned), "motion": armature_motion(arm, range(first, last + 1))}
+                     "n_skinned": len(skinned),
+                     "motion": armature_motion(arm, range(first, last + 1))}
 
 
 def render(path: Path, frame: int) -> None:

@@ -193,7 +193,8 @@ def test_worker_count_and_an_unreachable_scheduler_are_one_line_errors(masks, tm
     with socket.socket() as s:  # a port nobody listens on
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    assert main(["batch", str(manifest), "--out", out, "--scheduler", f"tcp://127.0.0.1:{port}"]) == 2
+    assert main(["batch", str(manifest), "--out", out, "--scheduler",
+                 f"tcp://127.0.0.1:{port}"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.splitlines()[-1].startswith("gaitcore: error: cannot reach the Dask scheduler")
     assert "Traceback" not in err

@@ -66,7 +66,8 @@ def clip(tmp_path_factory) -> dict:
         rows = list(csv.reader(fh))
     with (root / "keys.csv").open("w", newline="") as fh:
         csv.writer(fh).writerows([rows[0]] + [rows[f + 1] for f in keys])
-    common = ["--key-poses", str(root / "keys.csv"), "--skeleton", str(root / "syn" / "skeleton.json")]
+    common = ["--key-poses", str(root / "keys.csv"),
+              "--skeleton", str(root / "syn" / "skeleton.json")]
     for name, extra in (("clip", []), ("loop", ["--loop"])):
         out = root / name
         out.mkdir()
@@ -98,7 +99,8 @@ def _angle_deg(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Angle of the rotation between matrices a and b, (..., 3, 3) -> (...), degrees."""
     cos = (np.trace(np.swapaxes(a, -1, -2) @ b, axis1=-2, axis2=-1) - 1) / 2
     sin = np.linalg.norm(a - b, axis=(-2, -1)) / np.sqrt(2)  # exact enough for small angles
-    return np.degrees(np.where(cos > 0.99, np.arcsin(np.clip(sin, 0, 1)), np.arccos(np.clip(cos, -1, 1))))
+    return np.degrees(np.where(cos > 0.99, np.arcsin(np.clip(sin, 0, 1)),
+                               np.arccos(np.clip(cos, -1, 1))))
 
 
 def test_bvh_in_blender_matches_our_curves(clip):
@@ -150,7 +152,8 @@ def test_our_bvh_reexported_by_blender_round_trips(clip):
     for joint in (j for j in ours.joints if "rz" in j.channels):
         names = [f"{joint.name}.{c}" for c in ("rz", "rx", "ry")]
         a = euler_zxy_matrix(table.values[:, [table.columns.index(n) for n in names]])
-        b = z_up.T @ euler_zxy_matrix(again.values[:, [again.columns.index(n) for n in names]]) @ z_up
+        b = (z_up.T @ euler_zxy_matrix(again.values[:, [again.columns.index(n) for n in names]])
+             @ z_up)
         worst = max(worst, _angle_deg(a, b).max())
     assert worst < 1e-4
 

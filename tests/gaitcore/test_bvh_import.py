@@ -132,8 +132,8 @@ def test_xyz_channel_order_gives_the_same_world_positions(tmp_path):
     assert skel.joints[0].channels == ("tx", "ty", "tz", "rz", "rx", "ry")
     assert skel.joints[3].channels == ("rz", "rx", "ry")  # ZXY already: angles kept as is
     np.testing.assert_array_equal(table.values[:, -3:], angles[:, 3])
-    np.testing.assert_allclose(skel.joint_positions(table.values), _chain_world(orders, angles, text),
-                               atol=1e-9)
+    np.testing.assert_allclose(skel.joint_positions(table.values),
+                               _chain_world(orders, angles, text), atol=1e-9)
 
 
 @settings(max_examples=30, deadline=None)
@@ -294,10 +294,12 @@ BROKEN = {
     "bad OFFSET": (_broken("OFFSET 0 1 0", "OFFSET 0 one 0"), r"line 4: OFFSET needs 3 numbers"),
     "no HIERARCHY": (GOOD.replace("HIERARCHY\n", ""), r"line 1: a BVH file starts with HIERARCHY"),
     "no MOTION": (GOOD.split("MOTION")[0], r"no MOTION section"),
-    "no Frames line": (_broken("Frames: 2\n", ""), r"line 17: expected 'Frames: N', found 'Frame Time: 0.04'"),
+    "no Frames line": (_broken("Frames: 2\n", ""),
+                       r"line 17: expected 'Frames: N', found 'Frame Time: 0.04'"),
     "frame count": (_broken("Frames: 2", "Frames: 3"), r"'Frames: 3' but the file has 2 motion"),
     "zero frame time": (_broken("Frame Time: 0.04", "Frame Time: 0"), r"must be a positive"),
-    "non-numeric": (_broken("0 1 0 0 0 0 20", "0 1 0 0 abc 0 20"), r"line 20: 'abc' is not a number"),
+    "non-numeric": (_broken("0 1 0 0 0 0 20", "0 1 0 0 abc 0 20"),
+                    r"line 20: 'abc' is not a number"),
     "NaN value": (_broken("0 1 0 0 0 0 20", "0 1 0 0 nan 0 20"), r"line 20: NaN"),
     "too few values": (_broken("0 1 0 0 0 0 20 0 0", "0 1 0 0 0 0 20 0"),
                        r"line 20: too few values \(8; the CHANNELS of the hierarchy add up to 9\)"),

@@ -46,7 +46,8 @@ def test_analyze_writes_the_contract_fields(analysis_dir):
 
 
 def test_analyze_json_on_stdout_and_switching(masks, tmp_path, capsys):
-    assert main(["analyze", str(masks), "--out", str(tmp_path), "--switching", "--pcs", "3", "--json"]) == 0
+    assert main(["analyze", str(masks), "--out", str(tmp_path), "--switching", "--pcs", "3",
+                 "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert len(data["alternate_frames"]) == 4
     assert np.asarray(data["projections"]).shape == (100, 3)
@@ -65,7 +66,8 @@ def test_animate_is_exact_at_keys(analysis_dir, tmp_path):
     values = [(10.0 * i, -5.0 * i) for i in range(len(keys))]
     kp = _write_keys(tmp_path / "keys.csv", keys, values)
     out = tmp_path / "curves.csv"
-    assert main(["animate", str(analysis_dir / "analysis.json"), "--key-poses", str(kp), "--out", str(out)]) == 0
+    assert main(["animate", str(analysis_dir / "analysis.json"), "--key-poses", str(kp),
+                 "--out", str(out)]) == 0
     rows = np.loadtxt(out, delimiter=",", skiprows=1)
     assert rows.shape == (100, 3)
     assert out.read_text().splitlines()[0] == "frame,hip.rz,knee.rz"
@@ -103,13 +105,15 @@ def test_all_frames_identical(tmp_path, capsys):
 def test_fewer_than_two_distinct_frames_for_keys(tmp_path, capsys):
     a, b = walker_clip(13)[[0, 6]]
     folder = _masks(tmp_path / "m", [a] * 10 + [b] * 10)
-    assert main(["analyze", str(folder), "--out", str(tmp_path / "o"), "--keys", "3", "--pcs", "1"]) == 2
+    assert main(["analyze", str(folder), "--out", str(tmp_path / "o"), "--keys", "3",
+                 "--pcs", "1"]) == 2
     assert "distinct" in _error_line(capsys)
 
 
 def test_images_of_different_sizes(tmp_path, capsys):
     clip = walker_clip(10)
-    folder = _masks(tmp_path / "m", list(clip[:5]) + [np.zeros((50, 50), np.uint8)] + list(clip[6:]))
+    folder = _masks(tmp_path / "m",
+                    list(clip[:5]) + [np.zeros((50, 50), np.uint8)] + list(clip[6:]))
     assert main(["analyze", str(folder), "--out", str(tmp_path / "o")]) == 2
     assert "size" in _error_line(capsys)
 
@@ -129,7 +133,8 @@ def test_non_image_files(tmp_path, capsys):
 
 def test_nan_in_key_poses(analysis_dir, tmp_path, capsys):
     keys = json.loads((analysis_dir / "analysis.json").read_text())["key_frames"]
-    kp = _write_keys(tmp_path / "k.csv", keys, [(1.0, float("nan"))] + [(0.0, 0.0)] * (len(keys) - 1))
+    kp = _write_keys(tmp_path / "k.csv", keys,
+                     [(1.0, float("nan"))] + [(0.0, 0.0)] * (len(keys) - 1))
     assert main(["animate", str(analysis_dir / "analysis.json"), "--key-poses", str(kp),
                  "--out", str(tmp_path / "c.csv")]) == 2
     assert "NaN" in _error_line(capsys)
@@ -155,7 +160,8 @@ def test_key_poses_with_a_frame_that_is_not_a_key(analysis_dir, tmp_path, capsys
 def test_malformed_analysis_file(tmp_path, capsys):
     (tmp_path / "a.json").write_text("{not json")
     kp = _write_keys(tmp_path / "k.csv", [0], [(0.0, 0.0)])
-    assert main(["animate", str(tmp_path / "a.json"), "--key-poses", str(kp), "--out", str(tmp_path / "c.csv")]) == 2
+    assert main(["animate", str(tmp_path / "a.json"), "--key-poses", str(kp),
+                 "--out", str(tmp_path / "c.csv")]) == 2
     assert "a.json is not valid JSON (line 1, column 2)" in _error_line(capsys)
 
 

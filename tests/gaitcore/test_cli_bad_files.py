@@ -22,7 +22,8 @@ from gaitcore.cli import main
 ROOT = Path(__file__).resolve().parents[2]
 
 ANALYSIS = {"format": "gaitstudio-analysis", "version": 1, "n_frames": 6, "alpha": 0.69,
-            "key_frames": [1, 4], "projections": [[0.1 * i, 0.01 * i * i - 0.2 * i] for i in range(6)],
+            "key_frames": [1, 4],
+            "projections": [[0.1 * i, 0.01 * i * i - 0.2 * i] for i in range(6)],
             "loop_angle": [0.1 * i for i in range(6)]}
 
 
@@ -34,7 +35,8 @@ def bvh(n_joints: int, *, frames: str = "1", nested: bool = False) -> str:
         lines += [f"JOINT j{i}", "{", "OFFSET 0 1 0", "CHANNELS 3 Zrotation Xrotation Yrotation"]
         lines += [] if nested else ["}"]
     lines += ["}"] * (n_joints if nested else 1)
-    lines += ["MOTION", f"Frames: {frames}", "Frame Time: 0.04", " ".join(["0"] * (3 * n_joints + 3))]
+    lines += ["MOTION", f"Frames: {frames}", "Frame Time: 0.04",
+              " ".join(["0"] * (3 * n_joints + 3))]
     return "\n".join(lines) + "\n"
 
 
@@ -71,7 +73,8 @@ def _skeleton(f, name):
 
 CASES = {
     "subject inf": lambda f: ["analyze", f["masks"], "--out", f["dir"], "--subject", "inf,0,10,10"],
-    "subject 1e400": lambda f: ["analyze", f["masks"], "--out", f["dir"], "--subject", "1e400,0,9,9"],
+    "subject 1e400": lambda f: ["analyze", f["masks"], "--out", f["dir"], "--subject",
+                                "1e400,0,9,9"],
     "synth seed -1": lambda f: ["synth", "--gait", "walk", "--frames", "2", "--out",
                                 f["dir"] + "/s", "--noise", "1", "--seed", "-1"],
     "version string": lambda f: _animate(f, "v_str"),
@@ -95,7 +98,8 @@ def test_bad_input_exits_2_with_one_line(files, case, capsys):
 
 
 def test_negative_rectangles_need_no_equals_sign(files, capsys):
-    assert main(["analyze", files["masks"], "--out", files["dir"], "--subject", "-10,-10,50,50"]) == 2
+    assert main(["analyze", files["masks"], "--out", files["dir"], "--subject",
+                 "-10,-10,50,50"]) == 2
     assert "is empty" in capsys.readouterr().err  # parsed: the empty folder is the problem
 
 
@@ -118,7 +122,8 @@ def test_a_damaged_video_prints_one_line_not_the_decoder_log(shared_data, tmp_pa
     spots = rng.integers(len(data) // 10, len(data), 3000)
     data[spots] = rng.integers(0, 256, len(spots), dtype=np.uint8)  # as a bad disk or download
     (tmp_path / "damaged.mp4").write_bytes(data.tobytes())
-    run = subprocess.run([sys.executable, "-m", "gaitcore.cli", "analyze", str(tmp_path / "damaged.mp4"),
+    run = subprocess.run([sys.executable, "-m", "gaitcore.cli", "analyze",
+                          str(tmp_path / "damaged.mp4"),
                           "--out", str(tmp_path / "out"), "--subject", "10,10,50,50",
                           "--background", "0,0,5,5"],
                          cwd=ROOT, capture_output=True, text=True, timeout=300,

@@ -114,7 +114,8 @@ def test_csv_time_column_and_a_bvh_skeleton(canter, tmp_path):
     assert main(args + ["--out", str(tmp_path / "c.csv"), "--bvh", str(tmp_path / "rig.bvh"),
                         "--skeleton", str(canter["skeleton"])]) == 0
     assert main(args + ["--out", str(tmp_path / "t.csv"), "--csv-time", "--fps", "12.5",
-                        "--glb", str(tmp_path / "b.glb"), "--skeleton", str(tmp_path / "rig.bvh")]) == 0
+                        "--glb", str(tmp_path / "b.glb"),
+                        "--skeleton", str(tmp_path / "rig.bvh")]) == 0
     with (tmp_path / "t.csv").open() as fh:
         rows = list(csv.reader(fh))
     assert rows[0][:3] == ["frame", "time_s", "root.tx"] and len(rows) == N_FRAMES + 1
@@ -261,7 +262,8 @@ def test_preview_video_puts_footage_beside_the_skeleton(tmp_path):
     calls = []
     result = write_preview_video(tmp_path / "p.mp4", footage, HORSE, poses, 12.0,
                                  progress=lambda d, t: calls.append((d, t)) or True)
-    assert (result.path, result.codec, result.frames, result.note) == (tmp_path / "p.mp4", "mp4v", 6, None)
+    assert ((result.path, result.codec, result.frames, result.note)
+            == (tmp_path / "p.mp4", "mp4v", 6, None))
     assert calls[0] == (0, 6) and calls[-1] == (6, 6)
     frames = _read_video(result.path)
     assert len(frames) == 6 and frames[0].shape == (90, 120 + 120, 3)  # footage at its size
@@ -287,7 +289,8 @@ def test_preview_video_draws_the_skeleton_over_the_footage_where_it_was_fitted(t
     assert abs(drawn[:, 1].mean() - size[0] / 2) < 25 and abs(drawn[:, 0].mean() - size[1] / 2) < 25
     flipped = footage_maps(range(n), HORSE, None, size, FootageFit(flip=True))
     black = (np.zeros((size[1], size[0]), np.uint8) for _ in range(n))
-    result = write_preview_video(tmp_path / "q.mp4", black, HORSE, poses, footage_from_world=flipped)
+    result = write_preview_video(tmp_path / "q.mp4", black, HORSE, poses,
+                                 footage_from_world=flipped)
     mirror = _read_video(result.path)[0][:, : size[0]].astype(int)
     assert np.abs(mirror[:, ::-1] - view).mean() < 0.5 * np.abs(mirror - view).mean()
 

@@ -66,7 +66,8 @@ def test_lost_frames_cut_a_stretch():
 def test_ranking_prefers_usable_then_long():
     short, long_ = Cycle(0, 60, 24.0, 0.9, 0.9), Cycle(100, 300, 24.0, 0.8, 0.8)
     bad = Cycle(400, 700, 24.0, 0.9, 0.3)
-    ranked = sorted([bad, short, long_], key=lambda c: (not c.usable, -c.n_cycles * min(c.r1, c.r2)))
+    ranked = sorted([bad, short, long_],
+                    key=lambda c: (not c.usable, -c.n_cycles * min(c.r1, c.r2)))
     assert ranked == [long_, short, bad]
 
 

@@ -141,7 +141,8 @@ def _other_version(side):
 
 @pytest.mark.parametrize("damage", [_truncate, _garble, _bad_json, _swap_boxes, _missing,
                                     _other_version])
-def test_a_damaged_engine_is_ignored_and_the_correction_segments_again(scene_images, tmp_path, damage):
+def test_a_damaged_engine_is_ignored_and_the_correction_segments_again(scene_images, tmp_path,
+                                                                        damage):
     path = tmp_path / "horse.gaitproj"
     _saved_project(scene_images, path)
     damage(sidecar_dir(path))

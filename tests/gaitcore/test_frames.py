@@ -130,7 +130,8 @@ def test_truncated_avi_opens_with_what_still_decodes(tmp_path):
     cut.write_bytes(full[: int(len(full) * 0.8)])
     src = open_frames(cut)
     assert 0 < len(src) < 12
-    assert src.note == f"cut.avi: its header says 12 frames but {len(src)} decode; all {len(src)} are used"
+    assert src.note == (f"cut.avi: its header says 12 frames but {len(src)} decode; "
+                        f"all {len(src)} are used")
     assert [level(f) for f in src] == list(range(len(src)))
 
 

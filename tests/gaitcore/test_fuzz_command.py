@@ -59,7 +59,8 @@ def _mutate(argv: list[str], rng: random.Random) -> list[str]:
     for _ in range(rng.choice((1, 1, 1, 2))):
         fixed = {i + 1 for i, a in enumerate(argv) if a in ("--out", "--bvh")}  # outputs stay
         values = [i for i in range(1, len(argv)) if not argv[i].startswith("--") and i not in fixed]
-        options = [i for i in range(1, len(argv)) if argv[i].startswith("--") and i + 1 not in fixed]
+        options = [i for i in range(1, len(argv))
+                   if argv[i].startswith("--") and i + 1 not in fixed]
         r = rng.random()
         if r < 0.8:
             argv[rng.choice(values)] = rng.choice(VALUES)

@@ -105,7 +105,8 @@ def test_streamed_randomized_svd_matches_the_dense_route(monkeypatch):
     np.testing.assert_allclose(streamed.eigenvalues, dense.eigenvalues, rtol=1e-6)
     np.testing.assert_allclose(streamed.total_variance, dense.total_variance, rtol=1e-9)
     np.testing.assert_allclose(streamed.mean, dense.mean, atol=1e-12)
-    np.testing.assert_allclose(np.abs(streamed.projections[:, :2]), np.abs(dense.projections[:, :2]), atol=1e-4)
+    np.testing.assert_allclose(np.abs(streamed.projections[:, :2]),
+                               np.abs(dense.projections[:, :2]), atol=1e-4)
 
 
 @pytest.mark.parametrize("limit", [None, 1000])

@@ -1,4 +1,5 @@
-"""gaitcore must work on a machine without any Qt binding (README.md, Layout; an import-linter contract too)."""
+"""gaitcore must work on a machine without any Qt binding (README.md, Layout; an import-linter
+contract too)."""
 
 import subprocess
 import sys

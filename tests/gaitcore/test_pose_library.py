@@ -167,7 +167,8 @@ def test_a_tail_dragged_just_out_of_reach_keeps_its_curve_and_a_reachable_end_is
                 axis=0), axis=1).sum()  # 3% beyond the length of the tail, straight
     kept = drag_end(horse, curved, end, out)
     straight = drag_end(horse, curved, end, out, min_gain_m_per_deg=0.0)
-    assert np.abs(kept[tail] - curved[tail]).sum() < 0.5 * np.abs(straight[tail] - curved[tail]).sum()
+    assert (np.abs(kept[tail] - curved[tail]).sum()
+            < 0.5 * np.abs(straight[tail] - curved[tail]).sum())
     near = xyz[end] + [0.08, 0.05, 0.0]
     reached = drag_end(horse, curved, end, near)
     assert np.linalg.norm(horse.joint_positions(reached)[end] - near) < 1e-3

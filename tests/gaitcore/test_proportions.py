@@ -29,10 +29,12 @@ def test_each_part_scales_its_own_bones_and_the_feet_stay_on_the_ground(horse):
     assert set(parts) == {"legs", "neck", "body", "head", "tail"}
     assert parts[horse.joint_index("L_carpus")] == "legs"
     assert parts[horse.joint_index("L_scapula")] == "body"  # attaches the leg to the trunk
-    assert parts[horse.joint_index("tail3")] == "tail" and parts[horse.joint_index("ears")] == "head"
+    assert (parts[horse.joint_index("tail3")] == "tail"
+            and parts[horse.joint_index("ears")] == "head")
     props = RigProportions(legs=1.15, neck=0.85, body=1.05, head=1.1, tail=0.9)
     rig = proportioned(horse, props)
-    lengths = np.linalg.norm(rig.offsets, axis=1) / np.maximum(np.linalg.norm(horse.offsets, axis=1), 1e-12)
+    lengths = (np.linalg.norm(rig.offsets, axis=1)
+               / np.maximum(np.linalg.norm(horse.offsets, axis=1), 1e-12))
     for j in range(1, horse.n_joints):
         if np.linalg.norm(horse.offsets[j]) > 0:
             assert lengths[j] == pytest.approx(props.scale_of(parts[j])), horse.joint_names[j]

@@ -52,7 +52,8 @@ def test_forward_is_constant_velocity_and_keeps_the_bounce(walk):
     assert np.ptp(steps) < 1e-12 and steps[0] > 0
     ty = horse.channel_index("root.ty")
     assert np.array_equal(out[:, ty], curves[:, ty])
-    rest = [i for i in range(horse.n_channels) if i not in horizontal_root_channels(horse.channel_names)]
+    rest = [i for i in range(horse.n_channels)
+            if i not in horizontal_root_channels(horse.channel_names)]
     assert np.array_equal(out[:, rest], curves[:, rest])
 
 

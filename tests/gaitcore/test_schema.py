@@ -95,5 +95,6 @@ def test_read_npy_checks_the_header_against_the_file(tmp_path):
     with pytest.raises(GaitInputError, match="declares shape"):
         read_npy(f, what="array", kind="f", ndim=2, max_bytes=10)
     f.write_bytes(f.read_bytes()[:-1])
-    with pytest.raises(GaitInputError, match=r"declares shape \(3, 2\) \(48 bytes\) but it holds 47"):
+    with pytest.raises(GaitInputError,
+                       match=r"declares shape \(3, 2\) \(48 bytes\) but it holds 47"):
         read_npy(f, what="array", kind="f", ndim=2, max_bytes=1000)

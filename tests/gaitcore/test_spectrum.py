@@ -156,7 +156,8 @@ def test_fisher_test_separates_a_noisy_rhythm_from_noise():
     rng = np.random.default_rng(5)
     t = np.arange(137)
     assert fisher_periodicity_p(np.cos(2 * np.pi * t / 24) + rng.standard_normal(137)) < 1e-6
-    p_values = [fisher_periodicity_p(np.random.default_rng(s).standard_normal(137)) for s in range(200)]
+    p_values = [fisher_periodicity_p(np.random.default_rng(s).standard_normal(137))
+                for s in range(200)]
     # Under the null hypothesis p is uniform: about 1 % of noise clips fall below 0.01.
     assert 0 <= sum(p < 0.01 for p in p_values) <= 6
 

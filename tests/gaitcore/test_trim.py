@@ -61,9 +61,11 @@ def test_bvh_frame_time_has_ten_significant_digits(tmp_path):
     from gaitcore.rig.templates import load_template
 
     skeleton = load_template("horse")
-    table = PoseTable(np.arange(2), skeleton.channel_names, np.zeros((2, len(skeleton.channel_names))))
+    table = PoseTable(np.arange(2), skeleton.channel_names,
+                      np.zeros((2, len(skeleton.channel_names))))
     write_bvh(tmp_path / "a.bvh", skeleton, table, fps=29.97)
-    line = next(s for s in (tmp_path / "a.bvh").read_text().splitlines() if s.startswith("Frame Time"))
+    line = next(s for s in (tmp_path / "a.bvh").read_text().splitlines()
+                if s.startswith("Frame Time"))
     assert line == "Frame Time: 0.03336670003"
 
 

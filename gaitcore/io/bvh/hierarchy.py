@@ -168,7 +168,8 @@ class _Parser:
         tok, ln = self.toks.peek()
         word = tok.upper()
         if word in ("JOINT", "END", "}") and not joint.seen_offset:
-            raise self.fail(ln, f"{joint.kind} (line {joint.line}) has no OFFSET; add 'OFFSET x y z'")
+            raise self.fail(ln, f"{joint.kind} (line {joint.line}) has no OFFSET; "
+                                "add 'OFFSET x y z'")
         if word in ("JOINT", "END", "}") and not joint.seen_channels and not joint.end_site:
             raise self.fail(ln, f"{joint.kind} (line {joint.line}) has no CHANNELS; add e.g. "
                                 "'CHANNELS 3 Zrotation Xrotation Yrotation'")
@@ -224,7 +225,8 @@ def parse_hierarchy(lines: list[str], where: str) -> tuple[list[Node], int, int]
     tok, ln = toks.peek()
     if tok.upper() != "ROOT":
         if tok.upper() == "JOINT":
-            raise parser.fail(ln, "JOINT outside a ROOT; the hierarchy must start with 'ROOT <name>'")
+            raise parser.fail(ln, "JOINT outside a ROOT; the hierarchy must start with "
+                                  "'ROOT <name>'")
         raise parser.fail(ln, f"expected 'ROOT <name>' after HIERARCHY, found {tok or 'nothing'!r}")
     toks.take()
     stack = [parser.open_joint(-1, ln, False)]

@@ -232,7 +232,8 @@ def _joint_names(nodes: list[Node]) -> list[str]:
     names: list[str] = []
     taken: set[str] = set()
     for k, node in enumerate(nodes):
-        base = re.sub(r"[\s.]+", "_", node.name) if not node.end_site else f"{names[node.parent]}_end"
+        base = (re.sub(r"[\s.]+", "_", node.name) if not node.end_site
+                else f"{names[node.parent]}_end")
         base = base or f"joint{k}"
         name, n = base, 2
         while name in taken:
@@ -254,7 +255,8 @@ def _mirror_pairs(names: list[str], channels: list[tuple[str, ...]]) -> dict[str
             before, marker, after = m.groups()
             swap = {"L": "R", "R": "L", "l": "r", "r": "l"}.get(marker)
             if swap is None:
-                swap = next(rt if marker == lf else lf for lf, rt in _SIDE_WORDS if marker in (lf, rt))
+                swap = next(rt if marker == lf else lf for lf, rt in _SIDE_WORDS
+                            if marker in (lf, rt))
             partner = before + swap + after
             if partner in chans and partner != name and chans[partner] == chans[name]:
                 out[name] = ("L" if marker[0] in "Ll" else "R", partner)
