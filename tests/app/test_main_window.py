@@ -19,12 +19,18 @@ from gaitcore.silhouettes.tracking import crop_rois
 from tests.app.conftest import viewport_pos, wait_ready
 from tests.gaitcore.walker import walker_clip
 
+MOVE_MS = 15
+"""Milliseconds between the mouse moves of :func:`drag`."""
+
 
 def drag(qtbot, window, points_xy, before_release=None):
     """Press, move through and release at image points ``points_xy`` of the frame view
     (calling ``before_release()``, when given, just before the release).
 
-    Waits a double-click interval first, so that two drags in a row are not a double click.
+    Waits a double-click interval first, so that two drags in a row are not a double click,
+    and :data:`MOVE_MS` between moves, as a hand does: pyqtgraph drops mouse moves that come
+    sooner than its ``mouseRateLimit`` allows (10 ms). Sent all at once, a drag kept only its
+    first move and its release, and 20 points 4 pixels apart became a single dot.
     """
     qtbot.wait(QApplication.doubleClickInterval() + 20)
     fv = window.frame_view
@@ -32,6 +38,7 @@ def drag(qtbot, window, points_xy, before_release=None):
     pos = [viewport_pos(fv._view, fv.canvas, p) for p in points_xy]
     qtbot.mousePress(viewport, Qt.MouseButton.LeftButton, pos=pos[0])
     for p in pos[1:]:
+        qtbot.wait(MOVE_MS)
         qtbot.mouseMove(viewport, p)
     if before_release is not None:
         before_release()
