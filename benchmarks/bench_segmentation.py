@@ -44,7 +44,8 @@ from gaitcore.cli import main as gaitcore_main
 from gaitcore.footage.image_folder import read_mask_folder
 from gaitcore.footage.sources import open_frames
 from gaitcore.silhouettes.annotations import Rect, Scribble
-from gaitcore.silhouettes.propagate import PropagationSettings, exposed
+from gaitcore.silhouettes.exposure import exposed
+from gaitcore.silhouettes.propagate import PropagationSettings
 from gaitcore.silhouettes.roto import RotoSegmentation
 from gaitcore.silhouettes.segmentation import segment_clip
 

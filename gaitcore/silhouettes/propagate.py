@@ -175,8 +175,8 @@ class PropagationSettings:
         once the subject was found again, a pass measures from the gap it shows then.
     match_exposure : bool
         Bring each propagated frame back to its key frame's exposure and colour balance before
-        the key's colours judge it (see :class:`ExposureTrack`; off only to measure what it
-        brings).
+        the key's colours judge it (see :class:`~gaitcore.silhouettes.exposure.ExposureTrack`;
+        off only to measure what it brings).
     exposure_pull : float
         Each frame, the exposure and the colour balance followed from frame to frame are
         pulled this much (in log) towards the background's level and colour over the key
