@@ -62,6 +62,8 @@ class AnalysisController(QObject):
         self._asked = None
 
     def _start(self) -> None:
+        if self._asked is None:  # cancelled since the timer was started
+            return
         if self._job is not None:
             self._job.cancel()
         silhouettes, settings, trim = self._asked

@@ -34,7 +34,7 @@ import os
 import stat
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, NoReturn, overload
 
 import numpy as np
 
@@ -258,6 +258,14 @@ class JsonValue:
         return ((k, self._child(v, k)) for k, v in self.value.items())
 
     # -- scalars ---------------------------------------------------------------------------
+    @overload
+    def number(self, *, lo: float = ..., hi: float = ..., lo_open: bool = ...,
+               optional: Literal[False] = ...) -> float: ...
+
+    @overload
+    def number(self, *, lo: float = ..., hi: float = ..., lo_open: bool = ...,
+               optional: bool) -> float | None: ...
+
     def number(self, *, lo: float = -math.inf, hi: float = math.inf, lo_open: bool = False,
                optional: bool = False) -> float | None:
         """A finite number within [lo, hi] (or (lo, hi] with ``lo_open``); None when null
@@ -277,6 +285,12 @@ class JsonValue:
             raise self.fail(_range_words("a number", lo, hi, lo_open)
                             + (" or null" if optional else ""))
         return f
+
+    @overload
+    def integer(self, *, lo: int, hi: int, optional: Literal[False] = ...) -> int: ...
+
+    @overload
+    def integer(self, *, lo: int, hi: int, optional: bool) -> int | None: ...
 
     def integer(self, *, lo: int, hi: int, optional: bool = False) -> int | None:
         """A whole number within [lo, hi] (``3`` or ``3.0``); None when null and ``optional``."""
@@ -352,11 +366,12 @@ class JsonValue:
             self._first_bad_number(columns)
         return arr if columns is None else arr.reshape(len(rows), columns)
 
-    def _first_bad_number(self, columns: int | None) -> None:
+    def _first_bad_number(self, columns: int | None) -> NoReturn:
         """Raise for the first element that is not a finite number."""
         for row in self.items(max_len=len(self.value)):
             for cell in ([row] if columns is None else row.items(max_len=columns)):
                 cell.number()
+        raise self.fail("a list of finite numbers")
 
 
 def _range_words(kind: str, lo: float, hi: float, lo_open: bool) -> str:

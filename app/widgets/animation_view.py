@@ -38,8 +38,8 @@ class AnimationView(QWidget):
         self.plot.showGrid(x=True, y=True, alpha=0.2)
         self.plot.setMenuEnabled(False)
         self.plot.addLegend(offset=(-5, 5), labelTextSize="8pt", colCount=5)
-        self.cursor = pg.InfiniteLine(angle=90, pen=pg.mkPen("r", width=1))
-        self.plot.addItem(self.cursor)
+        self.frame_line = pg.InfiniteLine(angle=90, pen=pg.mkPen("r", width=1))
+        self.plot.addItem(self.frame_line)
         self._curves: list[pg.PlotDataItem] = []
         self.filtered = QCheckBox("band-pass filtered")
         self.filtered.setToolTip("Drive the animation with the filtered PC trajectories "
@@ -66,7 +66,7 @@ class AnimationView(QWidget):
         controller.animationChanged.connect(self._show)
         state.analysisChanged.connect(self._set_range)
         controller.statusChanged.connect(self.status.setText)
-        state.frameChanged.connect(lambda f: self.cursor.setValue(f))
+        state.frameChanged.connect(lambda f: self.frame_line.setValue(f))
         self.plot.scene().sigMouseClicked.connect(self._on_click)
         self._show(controller.animation)
         self.status.setText(controller.status)
@@ -121,7 +121,7 @@ class AnimationView(QWidget):
                                        movable=False, brush=pg.mkBrush(0, 150, 0, 30))
             self.plot.addItem(band)
             self._curves.append(band)
-        self.cursor.setValue(self._state.frame)
+        self.frame_line.setValue(self._state.frame)
 
     def _on_click(self, event) -> None:
         vb = self.plot.getPlotItem().getViewBox()

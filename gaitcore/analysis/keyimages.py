@@ -142,6 +142,8 @@ def _local_search(kernel, m, pinned, pool, starts, deadline) -> tuple[list, floa
             best, best_cond = chosen, cond
         if deadline is not None and time.monotonic() >= deadline:
             break
+    if best is None:
+        raise ValueError("the local search was given no start")
     return best, best_cond
 
 

@@ -39,7 +39,8 @@ def list_image_files(folder: Path) -> list[Path]:
     GaitInputError
         When the folder holds no image, or holds files that are not images.
     """
-    images, others = [], []
+    images: list[Path] = []
+    others: list[Path] = []
     for entry in sorted(folder.iterdir(), key=_natural_key):
         if entry.is_dir() or entry.name.startswith(".") or entry.name.lower() in _JUNK_NAMES:
             continue

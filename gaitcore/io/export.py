@@ -291,7 +291,7 @@ def _draw_skeleton(image: np.ndarray, skeleton: Skeleton, world: np.ndarray,
 def _open_writer(path: Path, fps: float, frame_size: tuple[int, int]):
     """The first codec of ``VIDEO_CODECS`` that opens: (writer, (path, fourcc), note)."""
     path.parent.mkdir(parents=True, exist_ok=True)
-    tried = []
+    tried: list[str] = []
     for fourcc, suffix in VIDEO_CODECS:
         target = path if suffix is None else path.with_suffix(suffix)
         writer = cv2.VideoWriter(str(target), cv2.VideoWriter_fourcc(*fourcc), fps, frame_size)

@@ -182,6 +182,6 @@ def _travel(names: tuple[str, ...], key_poses: Mapping[int, np.ndarray],
 
 
 def _stride(names: tuple[str, ...], key_poses: Mapping[int, np.ndarray], period: int,
-            mode: str) -> np.ndarray:
+            mode: str) -> np.ndarray | float:
     """How far the closing frame of a loop moves on from its first."""
     return period * _velocity(names, key_poses) if mode == "forward" else 0.0

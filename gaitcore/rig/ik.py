@@ -437,12 +437,8 @@ def _nearest_zxy(local: np.ndarray, current: np.ndarray) -> np.ndarray:
     first = zxy_from_matrix(local)
     second = first + [180.0, 0.0, 180.0]
     second[1] = 180.0 - first[1]
-    best = None
-    for cand in (first, second):
-        cand = cand + 360.0 * np.round((current - cand) / 360.0)
-        if best is None or np.abs(cand - current).sum() < np.abs(best - current).sum():
-            best = cand
-    return best
+    cands = [cand + 360.0 * np.round((current - cand) / 360.0) for cand in (first, second)]
+    return min(cands, key=lambda cand: float(np.abs(cand - current).sum()))  # first on a tie
 
 
 def _wrap(angle_rad: float) -> float:

@@ -205,7 +205,9 @@ class RoiAccumulator:
         crops = np.zeros((n, out_wh[1], out_wh[0]), dtype=bool)
         window = np.zeros((h, w), dtype=np.uint8)
         for t in np.nonzero(~lost)[0]:
-            bits, shape, (bx, by, bw, bh) = self._items[t]
+            item = self._items[t]
+            assert item is not None  # a frame with a centre has its crop
+            bits, shape, (bx, by, bw, bh) = item
             tight = np.unpackbits(bits, count=shape[0] * shape[1]).reshape(shape)
             x0 = int(round(centers[t, 0] - w / 2))
             y0 = int(round(centers[t, 1] - h / 2))

@@ -284,7 +284,7 @@ def test_the_predicted_skeleton_follows_playback(qtbot, window, canter_clip):
         frame = window.state.frame
         assert window.viewport.shown_kind == "predicted"
         np.testing.assert_array_equal(window.viewport.shown_pose, curves[frame])
-        assert window.animation_view.cursor.value() == frame
+        assert window.animation_view.frame_line.value() == frame
     window.state.set_frame(keys[0])
     assert window.viewport.shown_kind == "key"
     np.testing.assert_array_equal(window.viewport.shown_pose, truth[keys[0]])

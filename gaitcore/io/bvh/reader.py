@@ -104,7 +104,7 @@ def _parse_motion(lines: list[str], motion_line: int, n_columns: int,
     after = lines[motion_line].split(None, 1)  # text after MOTION on its own line, if any
     if len(after) > 1:
         rows.insert(0, (motion_line + 1, after[1]))
-    header = {}
+    header: dict[str, float] = {}
     for key, pattern in (("frames", r"^\s*frames\s*:\s*(\S+)\s*$"),
                          ("time", r"^\s*frame\s+time\s*:\s*(\S+)\s*$")):
         if not rows:
@@ -113,15 +113,16 @@ def _parse_motion(lines: list[str], motion_line: int, n_columns: int,
         number, text = rows.pop(0)
         m = re.match(pattern, text, re.IGNORECASE)
         try:
-            header[key] = float(m.group(1)) if m else None
+            value = float(m.group(1)) if m else None
         except ValueError:
-            header[key] = None
+            value = None
         if m and key == "time":
             digits = len(m.group(1).partition(".")[2])
-        if header[key] is None:
+        if value is None:
             expected = "Frames: N" if key == "frames" else "Frame Time: seconds"
             raise GaitInputError(f"{where}, line {number}: expected '{expected}', "
                                  f"found {text.strip()[:40]!r}")
+        header[key] = value
     frames, frame_time = header["frames"], header["time"]
     if not (np.isfinite(frames) and frames == int(frames) and frames >= 0):
         raise GaitInputError(f"{where}: 'Frames:' must be a whole number, got {frames:g}")
