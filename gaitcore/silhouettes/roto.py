@@ -308,7 +308,7 @@ class RotoSegmentation:
     def _state(self, t: int, cut: Cut) -> FrameState:
         keys = (t,) if t in self.keys else self._neighbours(t)
         area = min(self._key_area(k) for k in keys if k in self.keys)
-        return FrameState(self._lost(cut.mask, area), t in set(self.corrected_frames),
+        return FrameState(self._lost(cut.area, area), t in set(self.corrected_frames),
                           round(cut.confidence, 3))
 
     def _key_area(self, k: int) -> float:
@@ -335,13 +335,14 @@ class RotoSegmentation:
         held = [k for k in self.keys if k != t and self._holds(k)]
         return min(held, key=lambda k: abs(k - t), default=None)
 
-    def _lost(self, mask: np.ndarray, area: float) -> bool:
-        """Whether a mask holds under ``lost_frac`` of ``area``: the area of the key frame a
-        pass carried it from, or for a frame's state the smaller of its neighbouring keys'
-        (its own, on a key frame). Measured against frame 0's area instead, a subject that
-        was far smaller on a later frame (a rider riding away) was lost there even on a
-        frame the artist had painted it on, and the frame stayed empty."""
-        return float(mask.sum()) < self.s.lost_frac * area
+    def _lost(self, pixels: int, area: float) -> bool:
+        """Whether a mask of ``pixels`` pixels holds under ``lost_frac`` of ``area``: the area
+        of the key frame a pass carried it from, or for a frame's state the smaller of its
+        neighbouring keys' (its own, on a key frame). Measured against frame 0's area
+        instead, a subject that was far smaller on a later frame (a rider riding away) was
+        lost there even on a frame the artist had painted it on, and the frame stayed
+        empty."""
+        return pixels < self.s.lost_frac * area
 
     # -- key frames -------------------------------------------------------------------------
     def _subject_side(self, first: np.ndarray) -> float:
@@ -601,7 +602,7 @@ class RotoSegmentation:
                 gap = 0.0 if models is None else models.gap
                 exposure = ExposureTrack(grey, mask, window(mask, self.s), self.s, small)
             else:
-                if models is not None and self._lost(mask, area):
+                if models is not None and self._lost(cv2.countNonZero(mask), area):
                     cut = Cut(find_again(small, models, area, self.s), 0.0)
                     found = bool(cut.mask.any())
                 else:
@@ -731,8 +732,8 @@ class RotoSegmentation:
         g = None if key_frames_only or b >= self.n else self.bwd.get(t)
         if f is None or g is None:
             return f or g or Cut(np.zeros(self.fwd.shape, np.uint8), 0.0)
-        f_lost = not self._holds(a) or self._lost(f.mask, self._key_area(a))
-        g_lost = not self._holds(b) or self._lost(g.mask, self._key_area(b))
+        f_lost = not self._holds(a) or self._lost(f.area, self.keys[a].area)
+        g_lost = not self._holds(b) or self._lost(g.area, self.keys[b].area)
         if f_lost != g_lost:
             return g if f_lost else f
         w = self._weight(t, a, b)
