@@ -40,6 +40,7 @@ from gaitcore.project.roto_session import (
 )
 from gaitcore.project.steps import check_segmentation_input
 from gaitcore.silhouettes.annotations import Scribble, Stroke, check_scribbles
+from gaitcore.silhouettes.saliency import saliency_missing
 
 SCRIBBLES_FILTER = "Scribbles (*.json)"
 
@@ -118,10 +119,13 @@ class RotoController(QObject):
         self._say_how_many_to_check()
 
     def _say_how_many_to_check(self) -> None:
-        """Tell the artist how many frames are marked to check, when any are."""
+        """Tell the artist how many frames are marked to check, when any are, and that the
+        silhouettes were cut without the salient-object network when it is missing."""
         if check := self.frames_to_check():
             self._documents.messageRaised.emit(
                 f"{len(check)} frames to check (faint red on the timeline): K goes to the next")
+        if missing := saliency_missing():
+            self._documents.messageRaised.emit(missing)
 
     def _save_engine(self, path: Path) -> None:
         """Keep the engine of the project just saved beside its file (a running job changes

@@ -38,3 +38,11 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if item.get_closest_marker("fuzz") is not None:
             item.add_marker(skip)
+
+
+@pytest.fixture
+def without_saliency(tmp_path, monkeypatch) -> None:
+    """The silhouettes cut without the salient-object network, as on an install without its
+    model (:mod:`gaitcore.silhouettes.saliency`): for tests of the colour-only cuts and their
+    safeguards, which the network's map otherwise decides before them."""
+    monkeypatch.setenv("GAIT_SALIENCY_MODEL", str(tmp_path / "absent.onnx"))

@@ -123,12 +123,16 @@ def load_silhouettes(
             "--scribbles (or pass a folder of binary masks)"
         )
     from gaitcore.footage.sources import open_frames
+    from gaitcore.silhouettes.saliency import saliency_missing
     from gaitcore.silhouettes.segmentation import segment_clip
 
     with (open_frames(source, start=start, stop=stop) as frames,
           MaskWriter(Path(out_dir) / "masks") as write_mask):
         if frames.note and note_sink is not None:
             note_sink(frames.note)
+        missing = None if method == "gmm" else saliency_missing()
+        if missing and note_sink is not None:
+            note_sink(missing)
         return segment_clip(frames, list(subject), list(background), box=box,
                             scribbles=scribbles, method=method, progress=progress,
                             mask_sink=lambda index, mask: write_mask(start + index, mask),

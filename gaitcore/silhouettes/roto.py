@@ -46,6 +46,7 @@ from gaitcore.silhouettes.ground import (
 )
 from gaitcore.silhouettes.keyframe import (
     cut_first,
+    cut_salient,
     cut_with_prior,
     grown_box,
     motion_residuals,
@@ -65,6 +66,7 @@ from gaitcore.silhouettes.propagate import (
     warp_mask,
     window,
 )
+from gaitcore.silhouettes.saliency import SaliencyTrack, saliency_model
 from gaitcore.silhouettes.sketch import rasterize_strokes
 from gaitcore.silhouettes.tracking import keep_overlapping
 
@@ -174,6 +176,7 @@ class RotoSegmentation:
         self.bwd = PackedMasks(self.work.wh[::-1])
         self.keys: dict[int, Cut] = {}
         self.still: StillBackground | None = None
+        self.saliency = saliency_model() if self.s.saliency_weight > 0 else None
 
     # -- public -----------------------------------------------------------------------------
     @property
@@ -396,9 +399,13 @@ class RotoSegmentation:
         return out[0], out[1]
 
     def _first_cut(self) -> Cut:
-        """Frame 0 from the box, rectangles or strokes, cut at ``first_scale`` times the
-        working size (finer: nothing is known yet but the box)."""
+        """Frame 0 from the box, rectangles or strokes: from the salient-object network's map
+        of the box when it can (:meth:`_salient_first_cut`), else by GrabCut at
+        ``first_scale`` times the working size (finer: nothing is known yet but the box)."""
         frame = check_frame(self.source[0])
+        salient = self._salient_first_cut(frame)
+        if salient is not None:
+            return salient
         work = self.work
         self.work = WorkingSize.for_subject(work.shape, work.subject_side / self.s.first_scale,
                                             self.s)
@@ -407,6 +414,25 @@ class RotoSegmentation:
         finally:
             fine, self.work = self.work, work
         return Cut(work.shrink_mask(fine.enlarge(mask)).astype(np.uint8), 1.0)
+
+    def _salient_first_cut(self, frame: np.ndarray) -> Cut | None:
+        """Frame 0 cut from the network's map of the box (:func:`cut_salient`), the strokes
+        on it then applied as a correction's are (:meth:`_key_cut`). None without the
+        network or a box, with the paper's rectangles (their colours are the user's
+        statement), or when the map takes next to nothing or all of the box (the GrabCut
+        then decides, and :meth:`_check_first_cut` judges it)."""
+        if (self.saliency is None or self.box is None or self.subject_rects
+                or self.background_rects):
+            return None
+        box = self.box.as_tuple()
+        small = self.work.shrink_mask(cut_salient(self.saliency.in_box(frame, box)) > 0)
+        x, y, w, h = self.work.box(box)
+        inside = small[y : y + h, x : x + w]
+        if not inside.size or not EMPTY_BOX <= float(inside.mean()) <= FILLED_BOX:
+            return None
+        if any(sc.frame == 0 for sc in self.scribbles):
+            return self._key_cut(0, small.astype(np.float32))
+        return Cut(small.astype(np.uint8), 1.0)
 
     def _check_first_cut(self, mask: np.ndarray) -> None:
         """Refuse a first cut that fills its box (nothing in or around the box looked like
@@ -594,6 +620,8 @@ class RotoSegmentation:
         nearby = (NearbyGround(self.s, mask) if self.still is None and self.s.nearby_weight > 0
                   else None)
         prev = grey_prev = models = exposure = None
+        salient = (None if self.saliency is None
+                   else SaliencyTrack(self.saliency, self.s.saliency_every))
         gap, found = 0.0, False
         area = self._key_area(key)
         for t, small, grey in _ahead(frames, nearby):
@@ -607,7 +635,8 @@ class RotoSegmentation:
                     found = bool(cut.mask.any())
                 else:
                     cut, shown = self._step(mask, (prev, small), (grey_prev, grey), flow_of,
-                                            models, exposure, nearby, gap=gap, anchor=found)
+                                            models, exposure, nearby, salient, gap=gap,
+                                            anchor=found)
                     gap = min(gap, shown) if shown > 0 else gap
                     found = False
                 store.put(t, cut)
@@ -632,13 +661,14 @@ class RotoSegmentation:
         return key_colours(small, mask, self.s, self._stroke_masks(held)[1])
 
     def _step(self, mask, colours, greys, flow_of, models, exposure: ExposureTrack | None,
-              nearby: NearbyGround | None = None, *, gap: float = 0.0, anchor: bool = False
-              ) -> tuple[Cut, float]:
+              nearby: NearbyGround | None = None, salient: SaliencyTrack | None = None, *,
+              gap: float = 0.0, anchor: bool = False) -> tuple[Cut, float]:
         """One propagated frame (``colours`` and ``greys``: the previous frame and this one),
         brought back to its key frame's exposure and colour balance (``exposure`` follows
         them) before the key's colours judge it: a camera's auto-exposure and white balance,
         or Muybridge's plates, each printed lighter or darker. What lies behind the animal
-        is the clip's still background when there is one, else the pass's ``nearby`` ground.
+        is the clip's still background when there is one, else the pass's ``nearby`` ground;
+        what stands out in the window, the ``salient`` track's.
 
         The mask is lost when it stands out from its surroundings less than ``lost_gap`` of
         ``gap`` (see :func:`fuse_cut`). On the frame after the subject was searched for and
@@ -660,8 +690,10 @@ class RotoSegmentation:
         ground = None if behind is None else behind.ratios(small[y0:y1, x0:x1], warp.prob,
                                                            warp.window)
         here = exposed(small[y0:y1, x0:x1], gains)
+        cue = (None if salient is None
+               else salient.step(here, warp.window, mask.shape, warp.carried))
         cut = fuse_cut(here, warp.prob, warp.trust, models, self.s, warp.motion, ground, weight,
-                       gap=0.0 if anchor else gap)
+                       salient=cue, gap=0.0 if anchor else gap)
         out = np.zeros_like(mask)
         out[y0:y1, x0:x1] = cut.mask
         shown = colour_gap(models(here), cut.mask > 0) if anchor and cut.mask.any() else 0.0

@@ -276,7 +276,7 @@ def test_a_sketch_on_one_frame_propagates_with_the_engine_in_one_action(qtbot, w
 
 
 def test_a_box_over_the_whole_frame_says_why_and_keeps_the_box(qtbot, window, canter_clip,
-                                                               asker):
+                                                               asker, without_saliency):
     """The canvas cannot draw it (its corners are pixel centres), a project file can hold it."""
     window.open_path(canter_clip / "images")
     wait_ready(qtbot, window)
@@ -313,7 +313,8 @@ def test_real_footage_from_brush_strokes_alone_keeps_the_legs(qtbot, window, sha
 
 
 def test_the_timeline_marks_the_frames_to_check_and_k_goes_to_them(qtbot, window, tmp_path,
-                                                                    asker, artifacts_dir):
+                                                                    asker, artifacts_dir,
+                                                                    without_saliency):
     """A body that fades in a shade on frames 5-7 (see ``shaded_scene``): after segmenting,
     the timeline shows frame 5 (kept, at a low confidence) faint red and the lost frames 6
     and 7 red; K goes from frame 0 to 5, then 6; a background stroke on frame 6 takes it off

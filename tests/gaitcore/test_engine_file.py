@@ -181,7 +181,8 @@ def test_save_as_carries_the_engine_and_undo_states_are_saved(scene_images, tmp_
         assert resumed(None, source, project, saved=path) is not None
 
 
-def test_a_reopened_project_names_its_frames_to_check_without_reading_its_masks(tmp_path):
+def test_a_reopened_project_names_its_frames_to_check_without_reading_its_masks(
+        tmp_path, without_saliency):
     folder, path = tmp_path / "shade", tmp_path / "shade.gaitproj"
     project = Project(footage=folder, box=shaded_scene(folder))
     with open_frames(folder) as source:

@@ -78,7 +78,8 @@ def shaded_scene(folder):
     return Rect(14, 38, 72, 44)
 
 
-def test_the_frames_to_check_are_the_lost_and_the_doubtful_not_the_corrected(tmp_path):
+def test_the_frames_to_check_are_the_lost_and_the_doubtful_not_the_corrected(tmp_path,
+                                                                           without_saliency):
     from gaitcore.silhouettes.roto import DOUBTFUL_BELOW
 
     folder = tmp_path / "shade"
