@@ -121,11 +121,14 @@ class RotoController(QObject):
     def _say_how_many_to_check(self) -> None:
         """Tell the artist how many frames are marked to check, when any are, and that the
         silhouettes were cut without the salient-object network when it is missing."""
+        parts = []
         if check := self.frames_to_check():
-            self._documents.messageRaised.emit(
-                f"{len(check)} frames to check (faint red on the timeline): K goes to the next")
+            parts.append(f"{len(check)} frames to check (faint red on the timeline): K goes to "
+                         "the next")
         if missing := saliency_missing():
-            self._documents.messageRaised.emit(missing)
+            parts.append(missing)
+        if parts:
+            self._documents.messageRaised.emit("; ".join(parts))
 
     def _save_engine(self, path: Path) -> None:
         """Keep the engine of the project just saved beside its file (a running job changes

@@ -620,8 +620,7 @@ class RotoSegmentation:
         nearby = (NearbyGround(self.s, mask) if self.still is None and self.s.nearby_weight > 0
                   else None)
         prev = grey_prev = models = exposure = None
-        salient = (None if self.saliency is None
-                   else SaliencyTrack(self.saliency, self.s.saliency_every))
+        salient = self._saliency_track(key, mask)
         gap, found = 0.0, False
         area = self._key_area(key)
         for t, small, grey in _ahead(frames, nearby):
@@ -646,6 +645,27 @@ class RotoSegmentation:
             if nearby is not None:
                 nearby.settle(mask)
             prev, grey_prev = small, grey
+
+    def _saliency_track(self, key: int, mask: np.ndarray) -> SaliencyTrack | None:
+        """The network's cue for a pass from key frame ``key`` (cut ``mask``); None without
+        the network, or when the artist's background strokes there lie on what the network
+        calls salient: it took the same wrong thing, and would carry it back into the frames
+        the stroke was meant to mend. On DAVIS camel the mask drifts onto a second camel and
+        the fence between them, which the network calls salient in the window around both;
+        the scripted user's background stroke on the fence then lowered the clip (0.772
+        from the box, 0.689 after the strokes) until the passes from such keys ran without
+        the network (0.888; breakdance 0.520 -> 0.640; over 14 other clips no change above
+        0.005)."""
+        if self.saliency is None:
+            return None
+        background = self._stroke_masks(key)[1]
+        if background is not None and background.any() and mask.any():
+            x0, y0, x1, y1 = window(mask, self.s)
+            under = background[y0:y1, x0:x1]
+            small = self.work.shrink(check_frame(self.source[key]))
+            if under.any() and float(np.median(self.saliency(small[y0:y1, x0:x1])[under])) > 0.5:
+                return None
+        return SaliencyTrack(self.saliency, self.s.saliency_every)
 
     def _key_colours(self, key: int, small: np.ndarray, mask: np.ndarray
                      ) -> ColourTable | None:
