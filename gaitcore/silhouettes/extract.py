@@ -130,10 +130,11 @@ def load_silhouettes(
           MaskWriter(Path(out_dir) / "masks") as write_mask):
         if frames.note and note_sink is not None:
             note_sink(frames.note)
-        missing = None if method == "gmm" else saliency_missing()
-        if missing and note_sink is not None:
-            note_sink(missing)
-        return segment_clip(frames, list(subject), list(background), box=box,
+        clip = segment_clip(frames, list(subject), list(background), box=box,
                             scribbles=scribbles, method=method, progress=progress,
                             mask_sink=lambda index, mask: write_mask(start + index, mask),
                             state_sink=state_sink, max_side=max_side)
+    missing = None if method == "gmm" else saliency_missing()
+    if missing and note_sink is not None:
+        note_sink(missing)  # after the cut: an error stays the one line the user reads
+    return clip

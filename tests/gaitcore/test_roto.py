@@ -647,7 +647,7 @@ def test_confidence_falls_as_the_subject_stands_out_less_though_the_cut_holds_it
     assert confidence == sorted(confidence, reverse=True)
 
 
-def test_a_subject_found_again_is_not_lost_again_by_the_gap_it_was_found_with():
+def test_a_subject_found_again_is_not_lost_again_by_the_gap_it_was_found_with(without_saliency):
     """From frame 3, bands of the subject's brown cover the ground above and below it: its
     mask stands out from its surroundings far less than on the key frame, and frame 3 is
     lost. The search finds the body again on frame 4; the frames after it are measured from
