@@ -123,7 +123,8 @@ class RotoController(QObject):
         silhouettes were cut without the salient-object network when it is missing."""
         parts = []
         if check := self.frames_to_check():
-            parts.append(f"{len(check)} frames to check (faint red on the timeline): K goes to "
+            frames = "frame" if len(check) == 1 else "frames"
+            parts.append(f"{len(check)} {frames} to check (faint red on the timeline): K goes to "
                          "the next")
         if missing := saliency_missing():
             parts.append(missing)
