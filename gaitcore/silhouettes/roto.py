@@ -619,8 +619,7 @@ class RotoSegmentation:
         flow_of = make_flow(self.s)
         nearby = (NearbyGround(self.s, mask) if self.still is None and self.s.nearby_weight > 0
                   else None)
-        prev = grey_prev = models = exposure = None
-        salient = self._saliency_track(key, mask)
+        prev = grey_prev = models = exposure = salient = None
         gap, found = 0.0, False
         area = self._key_area(key)
         for t, small, grey in _ahead(frames, nearby):
@@ -628,6 +627,7 @@ class RotoSegmentation:
                 models = self._key_colours(key, small, mask)
                 gap = 0.0 if models is None else models.gap
                 exposure = ExposureTrack(grey, mask, window(mask, self.s), self.s, small)
+                salient = self._saliency_track(key, small, mask)
             else:
                 if models is not None and self._lost(cv2.countNonZero(mask), area):
                     cut = Cut(find_again(small, models, area, self.s), 0.0)
@@ -646,23 +646,23 @@ class RotoSegmentation:
                 nearby.settle(mask)
             prev, grey_prev = small, grey
 
-    def _saliency_track(self, key: int, mask: np.ndarray) -> SaliencyTrack | None:
-        """The network's cue for a pass from key frame ``key`` (cut ``mask``); None without
-        the network, or when the artist's background strokes there lie on what the network
-        calls salient: it took the same wrong thing, and would carry it back into the frames
-        the stroke was meant to mend. On DAVIS camel the mask drifts onto a second camel and
-        the fence between them, which the network calls salient in the window around both;
-        the scripted user's background stroke on the fence then lowered the clip (0.772
-        from the box, 0.689 after the strokes) until the passes from such keys ran without
-        the network (0.888; breakdance 0.520 -> 0.640; over 14 other clips no change above
-        0.005)."""
+    def _saliency_track(self, key: int, small: np.ndarray, mask: np.ndarray
+                        ) -> SaliencyTrack | None:
+        """The network's cue for a pass from key frame ``key`` (``small``, cut ``mask``);
+        None without the network, or when the artist's background strokes there lie on what
+        the network calls salient: it took the same wrong thing, and would carry it back
+        into the frames the stroke was meant to mend. On DAVIS camel the mask drifts onto a
+        second camel and the fence between them, which the network calls salient in the
+        window around both; the scripted user's background stroke on the fence then lowered
+        the clip (0.772 from the box, 0.689 after the strokes) until the passes from such
+        keys ran without the network (0.888; breakdance 0.520 -> 0.640; over 14 other clips
+        no change above 0.005)."""
         if self.saliency is None:
             return None
         background = self._stroke_masks(key)[1]
         if background is not None and background.any() and mask.any():
             x0, y0, x1, y1 = window(mask, self.s)
             under = background[y0:y1, x0:x1]
-            small = self.work.shrink(check_frame(self.source[key]))
             if under.any() and float(np.median(self.saliency(small[y0:y1, x0:x1])[under])) > 0.5:
                 return None
         return SaliencyTrack(self.saliency, self.s.saliency_every)

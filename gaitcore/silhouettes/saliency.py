@@ -97,10 +97,10 @@ class Saliency:
         out = np.zeros((rows, cols), np.float32)
         if x1 - x0 < 2 or y1 - y0 < 2:
             return out
-        out[y0:y1, x0:x1] = self(image[y0:y1, x0:x1])
-        inside = np.zeros_like(out, dtype=bool)
-        inside[max(0, y) : y + h, max(0, x) : x + w] = True
-        out[~inside] = 0
+        crop = self(image[y0:y1, x0:x1])
+        bx0, by0 = max(0, x), max(0, y)
+        bx1, by1 = min(cols, x + w), min(rows, y + h)
+        out[by0:by1, bx0:bx1] = crop[by0 - y0 : by1 - y0, bx0 - x0 : bx1 - x0]
         return out
 
 
@@ -113,7 +113,8 @@ def _loaded(path: Path) -> Saliency | str:
     except ImportError:
         return "onnxruntime is not installed"
     except Exception as exc:  # ONNX Runtime raises its own types for a bad file
-        return f"the saliency model at {path} could not be loaded ({exc})"
+        reason = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        return f"the saliency model at {path} could not be loaded ({reason})"
 
 
 def saliency_model() -> Saliency | None:
