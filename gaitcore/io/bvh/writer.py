@@ -37,8 +37,9 @@ def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: fl
         One row per frame, with a column for every channel of the skeleton (extra columns
         are ignored).
     fps : float
-        Frame rate, written as ``Frame Time: 1/fps`` to 10 significant digits (Blender reads
-        24 fps back as exactly 24, not 23.999997).
+        Frame rate, written as ``Frame Time: 1/fps`` to 12 decimals, trailing zeros kept
+        (Blender reads 24 fps back as exactly 24, not 23.999997; and a reader that snaps the
+        rate to what the printed digits allow cannot take ``0.8``, 1.25 fps, for 1.2).
     naming : {"as-is", "rigify"}
         Joint names as in the skeleton, or with ``.L``/``.R`` suffixes
         (:func:`gaitcore.io.bone_names.bone_names`).
@@ -98,7 +99,7 @@ def write_bvh(path: str | Path, skeleton: Skeleton, table: PoseTable, *, fps: fl
 
 def _write(path: Path, hierarchy: list[str], motion: np.ndarray, fps: float) -> None:
     """The file: the HIERARCHY lines, then MOTION with one line per frame."""
-    lines = hierarchy + ["MOTION", f"Frames: {len(motion)}", f"Frame Time: {1.0 / fps:.10g}"]
+    lines = hierarchy + ["MOTION", f"Frames: {len(motion)}", f"Frame Time: {1.0 / fps:.12f}"]
     lines.extend(" ".join(f"{v:.6f}" for v in row) for row in motion)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
