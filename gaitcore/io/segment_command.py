@@ -20,6 +20,10 @@ from gaitcore.silhouettes.annotations import Rect
 if TYPE_CHECKING:
     from gaitcore.silhouettes.roto import FrameState
 
+SALIENCY_EVERY = 4
+"""The default of ``--saliency-every``: ``PropagationSettings.saliency_every`` (not imported
+here, so that building the parser does not load OpenCV; a test holds the two together)."""
+
 MAX_PIXELS = 1 << 20
 """Largest coordinate a rectangle may have, in pixels."""
 
@@ -39,8 +43,20 @@ def _rect(text: str) -> Rect:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+def _every(text: str) -> int:
+    try:
+        value = int(text)
+        if value < 1:
+            raise ValueError
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number of frames, 1 or "
+                                         "more") from None
+    return value
+
+
 def add_segmentation_options(p: argparse.ArgumentParser) -> None:
-    """``--box``, ``--subject``, ``--background``, ``--scribbles`` and ``--method``."""
+    """``--box``, ``--subject``, ``--background``, ``--scribbles``, ``--method`` and
+    ``--saliency-every``."""
     p.add_argument("--box", type=_rect, default=None, metavar="X,Y,W,H",
                    help="box around the whole subject on the first frame")
     p.add_argument("--subject", type=_rect, action="append", default=[], metavar="X,Y,W,H",
@@ -54,15 +70,23 @@ def add_segmentation_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--method", choices=("propagate", "gmm"), default="propagate",
                    help="propagate (default: optical flow from the box, corrections both "
                    "ways) or gmm (the paper's colour mixture, rectangles only)")
+    p.add_argument("--saliency-every", type=_every, default=SALIENCY_EVERY, metavar="N",
+                   help="run the salient-object network every N frames, its map carried by "
+                   f"the optical flow between (default {SALIENCY_EVERY}); 1 cuts best and "
+                   "takes about twice as long")
 
 
 def segmentation_options(args: argparse.Namespace) -> dict:
     """The keyword options of ``load_silhouettes`` given on the command line."""
     from gaitcore.io.scribbles import read_scribbles
+    from gaitcore.silhouettes.propagate import PropagationSettings
+    from gaitcore.silhouettes.segmentation import SegmentationSettings
 
     scribbles = [] if args.scribbles is None else read_scribbles(args.scribbles)
     return {"subject": args.subject, "background": args.background, "box": args.box,
-            "scribbles": scribbles, "method": args.method, "note_sink": print_note}
+            "scribbles": scribbles, "method": args.method, "note_sink": print_note,
+            "settings": SegmentationSettings(
+                propagation=PropagationSettings(saliency_every=args.saliency_every))}
 
 
 def print_note(text: str) -> None:

@@ -10,6 +10,7 @@ import itertools
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
@@ -20,6 +21,9 @@ from gaitcore.progress import Progress
 from gaitcore.silhouettes.annotations import Rect, Scribble
 from gaitcore.silhouettes.roto import FrameState
 from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiClip, crop_rois
+
+if TYPE_CHECKING:
+    from gaitcore.silhouettes.segmentation import SegmentationSettings
 
 
 def is_mask_folder(path: Path) -> bool:
@@ -56,6 +60,7 @@ def load_silhouettes(
     box: Rect | None = None,
     scribbles: Sequence[Scribble] = (),
     method: str | None = None,
+    settings: SegmentationSettings | None = None,
     max_side: int | None = WORK_SIDE_PX,
     start: int = 0,
     stop: int | None = None,
@@ -82,6 +87,8 @@ def load_silhouettes(
         the range can start the segmentation without a box, as in the app.
     method : {"propagate", "gmm"}, optional
         Segmentation method (see :mod:`gaitcore.silhouettes.segmentation`).
+    settings : SegmentationSettings, optional
+        How the clip is segmented (its ``method`` overridden by ``method`` when given).
     max_side : int or None
         Longer side of the ROI crops (they are shrunk to it), which bounds memory on long
         clips; None keeps the source resolution.
@@ -131,7 +138,8 @@ def load_silhouettes(
         if frames.note and note_sink is not None:
             note_sink(frames.note)
         clip = segment_clip(frames, list(subject), list(background), box=box,
-                            scribbles=scribbles, method=method, progress=progress,
+                            scribbles=scribbles, method=method, settings=settings,
+                            progress=progress,
                             mask_sink=lambda index, mask: write_mask(start + index, mask),
                             state_sink=state_sink, max_side=max_side)
     missing = None if method == "gmm" else saliency_missing()
