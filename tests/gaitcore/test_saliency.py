@@ -90,3 +90,18 @@ def test_a_box_around_a_whole_rendered_horse_is_cut_from_the_network():
     first = seg.work.enlarge(seg._first_cut().mask)
     inter = np.logical_and(first, truth[0]).sum()
     assert inter / np.logical_or(first, truth[0]).sum() > 0.8
+
+
+def test_the_first_frames_map_is_drawn_in_float32():
+    """The propagated frames' cue may run in bfloat16 (where the processor has it, twice as
+    fast); the box's map, the first cut, is drawn in float32."""
+    net = saliency_model()
+    if net is None:
+        pytest.skip(saliency_missing())
+    rng = np.random.default_rng(3)
+    image = rng.integers(0, 255, (120, 160, 3)).astype(np.uint8)
+    image[40:90, 50:120] = (30, 60, 200)
+    box = (50, 40, 70, 50)
+    inside = net.in_box(image, box, grow=0.0)[40:90, 50:120]
+    assert np.array_equal(inside, net(image[40:90, 50:120], exact=True))
+    assert np.abs(net(image[40:90, 50:120]) - inside).mean() < 0.05  # the same map, roughly
