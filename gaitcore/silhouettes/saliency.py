@@ -55,8 +55,9 @@ class Saliency:
     """The network, loaded once; call it on a BGR picture (any size) for a float32 map of the
     same size in [0, 1], stretched so its least and most salient pixels read 0 and 1.
 
-    OpenVINO runs it in bfloat16 where the processor has it (this machine: 58 ms a window,
-    108 ms in float32): fast enough for the cue of the propagated frames. The first frame's
+    OpenVINO runs it in bfloat16 where the processor has it (58 ms a window, 108 ms in
+    float32, on the 2-core machine of 2026-11-28 morning; 125 and 213 ms on that evening's):
+    fast enough for the cue of the propagated frames. The first frame's
     cut (:meth:`in_box`, once a clip) runs it in float32: over 28 DAVIS clips its cut read
     0.807 IoU against 0.787 in bfloat16 (drift-chicane's small car 0.351 against 0.053).
     That model is compiled for the call and let go after it (0.4 s): kept, it held 135 MB
