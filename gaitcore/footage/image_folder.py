@@ -12,15 +12,14 @@ from __future__ import annotations
 import os
 import re
 import struct
-from collections import deque
 from collections.abc import Iterator
-from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+from gaitcore.footage.threads import InOrder
 
 IMAGE_SUFFIXES = frozenset(
     {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm", ".pbm", ".jp2"}
@@ -223,26 +222,17 @@ class MaskWriter:
             raise GaitInputError(f"cannot make the masks folder {self.folder}: "
                                  f"{exc.strerror or exc}; choose a folder you can write "
                                  "to") from None
-        self._ahead = max(1, ahead)
-        self._pending: deque[Future] = deque()
-        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mask-writer")
+        self._writer = InOrder("mask-writer", ahead)
 
     def __call__(self, frame: int, mask: np.ndarray) -> None:
         """Write ``mask`` (rows, cols) uint8 0/255 as frame ``frame``'s PNG."""
-        while len(self._pending) >= self._ahead:
-            self._pending.popleft().result()
-        self._pending.append(self._pool.submit(_write_mask, self.folder / f"{frame:05d}.png",
-                                               mask))
+        self._writer.submit(_write_mask, self.folder / f"{frame:05d}.png", mask)
 
     def __enter__(self) -> MaskWriter:
         return self
 
-    def __exit__(self, kind, *_) -> None:
-        try:
-            while self._pending and kind is None:
-                self._pending.popleft().result()
-        finally:
-            self._pool.shutdown(wait=True, cancel_futures=True)
+    def __exit__(self, *exc) -> None:
+        self._writer.__exit__(*exc)
 
 
 def _write_mask(path: Path, mask: np.ndarray) -> None:

@@ -16,10 +16,9 @@ of the (possibly trimmed) clip; ``FrameSource.source_index`` maps back to the fi
 from __future__ import annotations
 
 import os
-import queue
 import threading
 from collections import OrderedDict
-from collections.abc import Generator, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 
 import cv2
@@ -32,6 +31,7 @@ from gaitcore.footage.image_folder import (
     list_image_files,
     read_image,
 )
+from gaitcore.footage.threads import prefetched
 from gaitcore.schema import MAX_FPS
 
 # FFmpeg prints every decoding error of a damaged video on stderr (thousands of lines before
@@ -386,46 +386,6 @@ def video_fps(path: str | os.PathLike) -> float | None:
 
 
 # -- helpers ---------------------------------------------------------------------------
-def prefetched(items: Iterator, depth: int) -> Generator:
-    """Run ``items`` on a daemon thread, ``depth`` items ahead; errors reach the consumer."""
-    q: queue.Queue = queue.Queue(maxsize=depth)
-    stop = threading.Event()
-    done = object()
-
-    def work() -> None:
-        try:
-            for item in items:
-                while not stop.is_set():
-                    try:
-                        q.put(item, timeout=0.05)
-                        break
-                    except queue.Full:
-                        pass
-                if stop.is_set():
-                    break
-            else:
-                q.put(done)
-        except BaseException as exc:  # noqa: BLE001 - re-raised in the consuming thread
-            q.put(exc)
-        finally:
-            items.close()
-
-    thread = threading.Thread(target=work, name="gaitcore-decode", daemon=True)
-    thread.start()
-    try:
-        while (item := q.get()) is not done:
-            if isinstance(item, BaseException):
-                raise item
-            yield item
-    finally:
-        stop.set()
-        while thread.is_alive():  # unblock a producer waiting on a full queue
-            try:
-                q.get_nowait()
-            except queue.Empty:
-                thread.join(timeout=0.05)
-
-
 def _open_video(p: Path, start: int, stop: int | None, fps: float | None,
                 cache_frames: int) -> FrameSource:
     """Open a video by decoding it forward once: the frame count is what decodes, never what

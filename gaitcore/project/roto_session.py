@@ -40,6 +40,7 @@ from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
 from gaitcore.silhouettes.roto import FrameState, RotoSegmentation, frames_to_check
 from gaitcore.silhouettes.roto_state import RotoState, restore_state, roto_state
 from gaitcore.silhouettes.segmentation import (
+    RotoCollector,
     SegmentationSettings,
     collect_roto,
     full_frame_mask,
@@ -121,8 +122,10 @@ class RotoSession:
             When ``progress`` returned False.
         """
         engine = _engine(source, project, project.scribbles)
-        engine.run(progress)
-        return cls._finished(source, engine, project)
+        states: dict[int, FrameState] = {}
+        with RotoCollector(engine, None, states.__setitem__) as collect:
+            engine.run(progress, final=collect)
+        return cls._session(source, engine, project, collect.acc, states)
 
     @classmethod
     def from_state(cls, source: FrameSource, project: Project,
@@ -145,6 +148,11 @@ class RotoSession:
         """A session on ``engine``, run for ``project``: every frame's crop and state."""
         states: dict[int, FrameState] = {}
         crops = collect_roto(engine, None, states.__setitem__)
+        return cls._session(source, engine, project, crops, states)
+
+    @classmethod
+    def _session(cls, source: FrameSource, engine: RotoSegmentation, project: Project,
+                 crops: RoiAccumulator, states: dict[int, FrameState]) -> RotoSession:
         return cls(source, _EngineState(engine, crops, [states[t] for t in range(engine.n)],
                                         segmentation_key(project)))
 

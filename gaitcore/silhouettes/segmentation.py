@@ -22,6 +22,7 @@ import cv2
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+from gaitcore.footage.threads import InOrder
 from gaitcore.progress import Progress, report
 from gaitcore.silhouettes.annotations import Rect, Scribble
 from gaitcore.silhouettes.colour_model import ColourModel, check_frame, rect_mask
@@ -181,8 +182,9 @@ def segment_clip(
                                (box if isinstance(box, Rect) else Rect(*box)),
                                subject_rects=subject_rects, background_rects=background_rects,
                                scribbles=scribbles, settings=s.propagation)
-        seg.run(progress)
-        acc = collect_roto(seg, mask_sink, state_sink)
+        with RotoCollector(seg, mask_sink, state_sink) as collect:
+            seg.run(progress, final=collect)
+        acc = collect.acc
     return acc.finish(margin=margin, max_side=max_side)
 
 
@@ -200,16 +202,43 @@ def _segment_gmm(source, subject_rects, background_rects, s: SegmentationSetting
     return acc
 
 
-def collect_roto(seg: RotoSegmentation, mask_sink: MaskSink | None,
-                 state_sink: Callable[[int, FrameState], None] | None) -> RoiAccumulator:
-    """Every frame's mask of a finished propagation, all its components (legs may come
-    apart), into the ROI accumulator and the sinks."""
-    acc = RoiAccumulator()
-    for t, found, state in roto_frames(seg):
-        _collect(acc, found, seg.work.shape, t, mask_sink)
+class RotoCollector:
+    """Every frame's mask of a propagation, all its components (legs may come apart), into
+    the ROI accumulator :attr:`acc` and the sinks, in order, each outlined on its source frame
+    (:func:`roto_frame`) on a thread of its own. As :meth:`RotoSegmentation.run`'s ``final``
+    it works beside the propagation. Use it as a context manager: :attr:`acc` is whole once
+    the block is left without an error."""
+
+    def __init__(self, seg: RotoSegmentation, mask_sink: MaskSink | None,
+                 state_sink: Callable[[int, FrameState], None] | None) -> None:
+        self.seg, self.acc = seg, RoiAccumulator()
+        self._sinks = mask_sink, state_sink
+        self._behind = InOrder("mask-outline")
+
+    def __call__(self, t: int, image: np.ndarray) -> None:
+        """Take frame ``t`` (``image``: its source frame), its mask final."""
+        self._behind.submit(self._take, t, image)
+
+    def _take(self, t: int, image: np.ndarray) -> None:
+        found, state = roto_frame(self.seg, t, image)
+        mask_sink, state_sink = self._sinks
+        _collect(self.acc, found, self.seg.work.shape, t, mask_sink)
         if state_sink is not None:
             state_sink(t, state)
-    return acc
+
+    def __enter__(self) -> RotoCollector:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._behind.__exit__(*exc)
+
+
+def collect_roto(seg: RotoSegmentation, mask_sink: MaskSink | None,
+                 state_sink: Callable[[int, FrameState], None] | None) -> RoiAccumulator:
+    """:class:`RotoCollector` of a finished propagation."""
+    with RotoCollector(seg, mask_sink, state_sink) as collect:
+        seg.each_frame(collect)
+    return collect.acc
 
 
 def roto_frames(seg: RotoSegmentation, start: int = 0, stop: int | None = None

@@ -48,6 +48,34 @@ def test_one_box_is_enough():
     assert not any(seg.state(t).lost for t in range(len(frames)))
 
 
+@pytest.mark.parametrize(("strokes", "still", "streamed"), [
+    ((), 0.0, True),
+    ((), PropagationSettings().still_weight, False),
+    ((Scribble([[60.0, 50.0]], 4, 10, "subject"),), 0.0, False),
+])
+def test_every_frame_is_handed_on_once_in_order_with_its_final_mask(strokes, still, streamed):
+    """When the clip's one pass is its whole run (a box alone, no still background looked
+    for) it hands each frame on as it carries it, so that the caller's work on the masks
+    overlaps the pass; otherwise after the run (a pass to learn the still background, or
+    passes from a stroke, come after the first). Either way the caller sees what the
+    finished run gives."""
+    frames, truth = scene(14)
+    seg = RotoSegmentation(frames, box=padded_box(truth[0]), scribbles=strokes,
+                           settings=PropagationSettings(still_weight=still))
+    seen = []
+
+    def final(t, image):
+        seen.append((t, seg.mask(t).copy(), image, len(seg.fwd.frames)))
+
+    seg.run(final=final)
+    assert [t for t, *_ in seen] == list(range(14))
+    for t, mask, image, _ in seen:
+        assert np.array_equal(image, frames[t])
+        assert np.array_equal(mask, seg.mask(t)), t
+    carried = [n for *_, n in seen]  # frames the forward passes had carried by then
+    assert carried == (list(range(14)) if streamed else [13] * 14)
+
+
 def test_a_correction_changes_only_the_frames_up_to_the_neighbouring_keys():
     frames, truth = scene(14)
     seg = RotoSegmentation(frames, box=padded_box(truth[0]))
