@@ -23,6 +23,7 @@ import functools
 import os
 import threading
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from importlib.resources import as_file, files
 from pathlib import Path
 
@@ -86,7 +87,11 @@ class Saliency:
         self._core = ov.Core()
         fast = self._network.clone()
         fast.reshape([1, 3, FAST_SIDE, FAST_SIDE])
-        self._fast = self._compiled(fast, {})
+        # Compiling is mostly one thread's work: this one runs beside the first frame's
+        # (:meth:`in_box`), which the propagated frames wait for anyway.
+        compiling = ThreadPoolExecutor(max_workers=1, thread_name_prefix="saliency-compile")
+        self._fast = compiling.submit(self._compiled, fast, {})
+        compiling.shutdown(wait=False)
         self._lock = threading.Lock()  # one fast request; the app may ask from two threads
 
     def _compiled(self, network, config: dict) -> tuple:
@@ -115,7 +120,7 @@ class Saliency:
             out = np.array(request.infer(feed)[output][0, 0])
         else:
             with self._lock:
-                request, output = self._fast
+                request, output = self._fast.result()
                 out = np.array(request.infer(feed)[output][0, 0])
         low, high = float(out.min()), float(out.max())
         out = (out - low) / max(high - low, 1e-6)
