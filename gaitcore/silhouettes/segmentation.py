@@ -26,7 +26,7 @@ from gaitcore.footage.threads import InOrder
 from gaitcore.progress import Progress, report
 from gaitcore.silhouettes.annotations import Rect, Scribble
 from gaitcore.silhouettes.colour_model import ColourModel, check_frame, rect_mask
-from gaitcore.silhouettes.propagate import PropagationSettings
+from gaitcore.silhouettes.propagate import PropagationSettings, disk
 from gaitcore.silhouettes.roto import FrameState, RotoSegmentation
 from gaitcore.silhouettes.tracking import (
     WORK_SIDE_PX,
@@ -75,10 +75,6 @@ class SegmentationSettings:
                                  "n_components >= 1")
 
 
-def _disk(r: int) -> np.ndarray:
-    return cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
-
-
 def _gmm_masks(frames: Iterable[np.ndarray], subject_rects: Sequence[Rect],
                background_rects: Sequence[Rect], s: SegmentationSettings
                ) -> Iterable[tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray] | None]]:
@@ -99,8 +95,8 @@ def _gmm_masks(frames: Iterable[np.ndarray], subject_rects: Sequence[Rect],
                                  "all frames must have the same size")
         m = (model.posterior(frame) > 127).astype(np.uint8)
         r = max(1, round(min(shape) / 240))
-        m = cv2.morphologyEx(m, cv2.MORPH_OPEN, _disk(r))
-        m = cv2.morphologyEx(m, cv2.MORPH_CLOSE, _disk(3 * r))
+        m = cv2.morphologyEx(m, cv2.MORPH_OPEN, disk(r))
+        m = cv2.morphologyEx(m, cv2.MORPH_CLOSE, disk(3 * r))
         found = tracker.update(m)
         if found is not None:
             crop, box, centre = found
