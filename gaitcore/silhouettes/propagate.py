@@ -427,7 +427,7 @@ def disk(r: int) -> np.ndarray:
 
 @lru_cache(maxsize=64)
 def _disk(r: int) -> np.ndarray:
-    """Made once a radius: a propagated frame asks for a dozen (0.1 s of 300 frames)."""
+    """Made once a radius: a propagated frame asks for a dozen."""
     kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
     kernel.flags.writeable = False
     return kernel
