@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import threading
 
 import cv2
 import numpy as np
@@ -20,6 +21,7 @@ from gaitcore.bench.scripted_user import (
 from gaitcore.cli import main
 from gaitcore.errors import GaitInputError
 from gaitcore.io.scribbles import read_scribbles, scribbles_from_dict, write_scribbles
+from gaitcore.progress import Cancelled
 from gaitcore.silhouettes.annotations import Rect, Scribble
 from gaitcore.silhouettes.propagate import (
     Cut,
@@ -29,6 +31,7 @@ from gaitcore.silhouettes.propagate import (
     overlap,
 )
 from gaitcore.silhouettes.roto import RotoSegmentation
+from gaitcore.silhouettes.segmentation import SegmentationSettings, segment_clip
 from tests.gaitcore.test_segmentation import scene
 
 
@@ -74,6 +77,19 @@ def test_every_frame_is_handed_on_once_in_order_with_its_final_mask(strokes, sti
         assert np.array_equal(mask, seg.mask(t)), t
     carried = [n for *_, n in seen]  # frames the forward passes had carried by then
     assert carried == (list(range(14)) if streamed else [13] * 14)
+
+
+def test_a_cancel_while_masks_are_outlined_beside_the_pass_stops_its_threads():
+    frames, truth = scene(14)
+    written = []
+    settings = SegmentationSettings(propagation=PropagationSettings(still_weight=0.0))
+    with pytest.raises(Cancelled):
+        segment_clip(frames, box=padded_box(truth[0]), settings=settings,
+                     mask_sink=lambda t, mask: written.append(t),
+                     progress=lambda done, total: done < 8)
+    assert written == list(range(len(written))) and len(written) < 14
+    names = [t.name for t in threading.enumerate()]
+    assert not [n for n in names if n.startswith(("mask-outline", "gaitcore-decode"))], names
 
 
 def test_a_correction_changes_only_the_frames_up_to_the_neighbouring_keys():
