@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable, Collection, Generator, Iterable, Iterator, Sequence
+from contextlib import closing
 from dataclasses import dataclass
 
 import cv2
@@ -238,12 +239,9 @@ class RotoSegmentation:
         """Every frame ``(t, image)`` with its source image to ``final`` (when there is one),
         in order, decoded on a thread ahead (:meth:`images`)."""
         if final is not None:
-            images = self.images()
-            try:
+            with closing(self.images()) as images:
                 for t, image in images:
                     final(t, image)
-            finally:
-                images.close()
 
     def _passes(self, key_frames: list[int], progress, done: list[int], total: int,
                 final: OnFinal | None = None) -> None:

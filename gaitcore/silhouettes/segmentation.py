@@ -16,6 +16,7 @@ Two methods:
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Sequence
+from contextlib import closing
 from dataclasses import dataclass, field, replace
 
 import cv2
@@ -243,12 +244,9 @@ def roto_frames(seg: RotoSegmentation, start: int = 0, stop: int | None = None
     """:func:`roto_frame` of frames ``start <= t < stop`` (to the end: None) in order, as
     ``(t, found, state)``, their source frames decoded on a thread ahead
     (:meth:`RotoSegmentation.images`)."""
-    images = seg.images(start, stop)
-    try:
+    with closing(seg.images(start, stop)) as images:
         for t, image in images:
             yield (t, *roto_frame(seg, t, image))
-    finally:
-        images.close()
 
 
 def roto_frame(seg: RotoSegmentation, t: int, image: np.ndarray | None = None
