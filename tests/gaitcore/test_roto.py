@@ -128,10 +128,31 @@ def test_where_one_pass_lost_the_subject_the_other_is_taken_whole():
     for t in (5, 6):
         seg.bwd.put(t, empty)
     kept = seg.fwd.get(5).mask
-    assert seg._weight(5, 0, 10) < 0.5
+    assert seg._weight(5, 0, 10, kept, seg.bwd.get(5).mask) < 0.5
     assert np.array_equal(seg._final(5).mask, kept) and not seg.state(5).lost
     seg.fwd.put(6, empty)
     assert seg.state(6).lost
+
+
+def test_a_pass_that_fails_at_once_near_its_key_is_found_out_by_how_far_the_passes_differ():
+    """The pass back from the corrected frame 10 fails at once: on frame 9 its mask lies
+    beside the subject's, yet it is nearer its key than the pass from frame 0 (which differs
+    from key 10 by about a fifth) and, by nearness alone, took the frame (DAVIS
+    dog-agility). The two masks differ by more than the pass from frame 0 can have drifted
+    anywhere, so the rest is the failed pass's error and frame 9 is the first pass's."""
+    frames, truth = scene(14)
+    seg = RotoSegmentation(frames, box=padded_box(truth[0]))
+    seg.run()
+    seg.correct([Scribble([[60.0, 50.0]], 4, 10, "subject")])
+    key10, key0 = seg.keys[10].mask, seg.keys[0].mask
+    _, _, w, _ = cv2.boundingRect(key10)
+    seg.fwd.put(10, Cut(cv2.erode(key10, disk(1)), 1.0))  # drifted a little
+    seg.bwd.put(0, Cut(np.roll(key0, w // 2, axis=1), 1.0))  # drifted half the way back
+    kept = seg.fwd.get(9).mask
+    seg.bwd.put(9, Cut(np.roll(kept, w, axis=1), 1.0))  # lost at once, beside the body
+    assert 1.0 - overlap(seg.fwd.get(10).mask > 0, key10 > 0) > 0.1
+    assert seg._weight(9, 0, 10, kept, seg.bwd.get(9).mask) > 0.5
+    assert overlap(seg._final(9).mask > 0, kept > 0) > 0.9
 
 
 def _masks(seg):
