@@ -123,10 +123,11 @@ class PropagationSettings:
         (legs 0.754) but the dog, which turns and needs its key frames' own colours, 0.873.
     stroke_zone_frac : float
         The corrected frame's cut is taken within this fraction of the subject's side around
-        those bands; elsewhere the frame keeps the mask it had. A stroke changes its frame
-        near itself, not along a far edge the graph cut re-learnt from the whole frame (over
-        the scripted user's 69 strokes on DAVIS, the stroked frame got worse 5 times
-        instead of 11).
+        those bands (beside a band, only as the network sees it: see
+        ``RotoSegmentation._own_way``); elsewhere the frame keeps the mask it had. A stroke
+        changes its frame near itself, not along a far edge the graph cut re-learnt from the
+        whole frame (over the scripted user's 69 strokes on DAVIS, the stroked frame got
+        worse 5 times instead of 11).
     prior_weight, prior_blur_frac, smooth_frac : float
         How a propagated frame is decided (see :func:`fuse_cut`) where the flow is not
         trusted: weight of the warped mask against colour, its blur and the guided filter's

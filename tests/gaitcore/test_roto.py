@@ -1024,9 +1024,9 @@ def test_a_box_around_more_than_the_animal_keeps_the_cut_of_what_moves():
 
 def test_a_stroke_changes_its_frame_near_itself_only():
     """A corrected frame whose mask holds a wrong strip of background along the top of its
-    box, far from the stroke painted at the bottom: the graph cut of the whole frame would
-    drop the strip too, but the correction keeps to the stroke's surroundings (unless the
-    zone is made to span the frame)."""
+    box, far from the background stroke painted below the body: the graph cut of the whole
+    frame would drop the strip too, but the correction keeps to the stroke's surroundings
+    (unless the zone is made to span the frame)."""
     from gaitcore.silhouettes.propagate import PropagationSettings
 
     frames, truth = scene(14)
@@ -1039,14 +1039,58 @@ def test_a_stroke_changes_its_frame_near_itself_only():
         x, y, w, h = cv2.boundingRect(body)
         strip = np.zeros_like(body)
         strip[max(0, y - 4) : y, x : x + w] = 1  # background above the back, in the mask
-        stroke_y = (y + h - 2) / seg.work.scale  # along the bottom of the box, source pixels
+        stroke_y = (y + h + 3) / seg.work.scale  # on the ground below the box, source pixels
         seg.scribbles = (Scribble([[(x + w * 0.3) / seg.work.scale, stroke_y],
                                    [(x + w * 0.7) / seg.work.scale, stroke_y]], 3, 7,
-                                  "subject"),)
+                                  "background"),)
         assert strip.sum() > 20
         results[zone] = seg._key_cut(7, (body | strip).astype(np.float32)).mask
     assert results[0.1][strip > 0].all()  # far from the stroke: as it was
     assert results[10.0][strip > 0].mean() < 0.5  # the whole frame re-cut drops it
+
+
+def test_a_stroke_changes_its_frame_beside_itself_only_where_the_network_agrees():
+    """Beside a stroke's band, the graph cut of a corrected frame turns a pixel to the
+    stroke's side only where the network sees what it sees under the stroke, and to the
+    other side only where it does not: a background stroke on the ground between two legs
+    does not take the leg beside it, which the network calls salient, even where the
+    frame's graph cut did, nor add the ground around it; a subject stroke on the body does
+    not drop it."""
+    frames, truth = scene(14)
+    seg = RotoSegmentation(frames, box=padded_box(truth[0]))
+    shape = (160, 200)
+    before = np.zeros(shape, np.uint8)
+    before[40:80, 60:140] = 1  # the body
+    before[80:110, 70:80] = 1  # a leg
+    before[80:110, 80:100] = 1  # ground between the legs, taken
+    band = np.zeros(shape, bool)
+    band[84:106, 84:96] = True  # the background stroke's band, inside the ground taken
+    stroke = np.zeros(shape, bool)
+    stroke[88:102, 89:91] = True
+    salient = np.zeros(shape, np.float32)
+    salient[40:110, 60:80] = 1.0
+    salient[40:80, 60:140] = 1.0  # the body and the leg stand out, the ground does not
+    seg.saliency = lambda image: salient[tuple(slice(a, b) for a, b in _window_of(seg, before))]
+    cut = np.ones(shape, bool)  # the frame's cut takes the ground around ...
+    cut[80:110, 74:100] = False  # ... but drops the ground taken and half the leg
+    picture = np.zeros((*shape, 3), np.uint8)
+    out = seg._own_way(picture, before, cut, {"background": band}, {"background": stroke})
+    assert not out[80:110, 80:100].any()  # the ground under and beside the band: turned
+    assert out[80:110, 70:80].all()  # the salient leg beside it: kept
+    assert out[40:80, 60:140].all()
+    assert not (out > before).any()  # no ground added
+    on_body = np.zeros(shape, bool)
+    on_body[50:70, 90:110] = True  # a subject stroke's band on the body
+    out = seg._own_way(picture, before, np.zeros(shape, bool), {"subject": on_body},
+                       {"subject": on_body & np.roll(on_body, 5, axis=0)})
+    assert out[40:80, 60:140].all()  # a cut that drops all: the body beside it kept
+
+
+def _window_of(seg: RotoSegmentation, mask: np.ndarray) -> tuple[tuple[int, int], ...]:
+    from gaitcore.silhouettes.propagate import window
+
+    x0, y0, x1, y1 = window(mask, seg.s)
+    return (y0, y1), (x0, x1)
 
 
 def test_the_warp_measures_a_change_of_exposure_and_trusts_the_flow_through_it():
