@@ -579,20 +579,14 @@ class RotoSegmentation:
         scripted user's ten strokes there lowered their own frame."""
         _, _, w, h = cv2.boundingRect(before)
         reach = disk(round(self.s.stroke_zone_frac * max(w, h)))
-        salient = None
-        if self.saliency is not None:
-            x0, y0, x1, y1 = window(before, self.s)
-            salient = np.full(before.shape, np.nan, np.float32)
-            salient[y0:y1, x0:x1] = self.saliency(small[y0:y1, x0:x1])
+        salient = self._network_map(small, before)
         out = before > 0
         for label, band in bands.items():
             zone = cv2.dilate(band.astype(np.uint8), reach) > 0
             toward = against = zone
-            under = strokes[label]
-            seen = None if salient is None or under is None else salient[under]
-            seen = None if seen is None else seen[~np.isnan(seen)]
-            if seen is not None and seen.size:
-                alike = np.isnan(salient) | ((salient > 0.5) == (np.median(seen) > 0.5))
+            seen = _median_under(salient, strokes[label])
+            if salient is not None and seen is not None:
+                alike = np.isnan(salient) | ((salient > 0.5) == (seen > 0.5))
                 toward = zone & (band | alike)
                 against = zone & ~band & ~alike
             if label == "subject":
@@ -600,6 +594,16 @@ class RotoSegmentation:
             else:
                 out = (out & ~(toward & ~cut)) | (against & cut)
         return out.astype(np.uint8)
+
+    def _network_map(self, small: np.ndarray, mask: np.ndarray) -> np.ndarray | None:
+        """The network's map of the window around ``mask`` on the working-size frame
+        ``small``, NaN outside the window; None without the network or a mask."""
+        if self.saliency is None or not mask.any():
+            return None
+        x0, y0, x1, y1 = window(mask, self.s)
+        out = np.full(mask.shape, np.nan, np.float32)
+        out[y0:y1, x0:x1] = self.saliency(small[y0:y1, x0:x1])
+        return out
 
     def _box_around(self, t: int, subject: np.ndarray) -> tuple[int, int, int, int]:
         """A box (working size) around the subject strokes ``subject`` of frame ``t``, as wide
@@ -730,10 +734,9 @@ class RotoSegmentation:
         if self.saliency is None:
             return None
         background = self._stroke_masks(key)[1]
-        if background is not None and background.any() and mask.any():
-            x0, y0, x1, y1 = window(mask, self.s)
-            under = background[y0:y1, x0:x1]
-            if under.any() and float(np.median(self.saliency(small[y0:y1, x0:x1])[under])) > 0.5:
+        if background is not None and background.any():
+            seen = _median_under(self._network_map(small, mask), background)
+            if seen is not None and seen > 0.5:
                 return None
         return SaliencyTrack(self.saliency, self.s.saliency_every)
 
@@ -910,6 +913,16 @@ def _keeping(stream: Generator[Framed, None, None], picks: Collection[int],
             yield t, small, image
     finally:
         stream.close()
+
+
+def _median_under(values: np.ndarray | None, under: np.ndarray | None) -> float | None:
+    """The median of ``values`` (NaN where unknown) under the pixels ``under``; None where
+    none of them is known."""
+    if values is None or under is None:
+        return None
+    known = values[under]
+    known = known[~np.isnan(known)]
+    return float(np.median(known)) if known.size else None
 
 
 def _union(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
