@@ -595,12 +595,16 @@ class RotoSegmentation:
                 out = (out & ~(toward & ~cut)) | (against & cut)
         return out.astype(np.uint8)
 
-    def _network_map(self, small: np.ndarray, mask: np.ndarray) -> np.ndarray | None:
+    def _network_map(self, small: np.ndarray, mask: np.ndarray,
+                     under: np.ndarray | None = None) -> np.ndarray | None:
         """The network's map of the window around ``mask`` on the working-size frame
-        ``small``, NaN outside the window; None without the network or a mask."""
+        ``small``, NaN outside the window; None without the network or a mask, or when
+        ``under`` (pixels the map is wanted at) has none in the window: not run for them."""
         if self.saliency is None or not mask.any():
             return None
         x0, y0, x1, y1 = window(mask, self.s)
+        if under is not None and not under[y0:y1, x0:x1].any():
+            return None
         out = np.full(mask.shape, np.nan, np.float32)
         out[y0:y1, x0:x1] = self.saliency(small[y0:y1, x0:x1])
         return out
@@ -735,7 +739,7 @@ class RotoSegmentation:
             return None
         background = self._stroke_masks(key)[1]
         if background is not None and background.any():
-            seen = _median_under(self._network_map(small, mask), background)
+            seen = _median_under(self._network_map(small, mask, background), background)
             if seen is not None and seen > 0.5:
                 return None
         return SaliencyTrack(self.saliency, self.s.saliency_every)
