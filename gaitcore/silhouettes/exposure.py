@@ -40,23 +40,44 @@ def background_pixels(grey: np.ndarray, subject: np.ndarray) -> np.ndarray:
     return measurable(grey) & (subject < 0.05)
 
 
+with np.errstate(divide="ignore", invalid="ignore"):
+    _LOG = np.log(np.arange(256, dtype=np.float32))
+    _PAIR_RATIO = (_LOG[:, None] - _LOG[None, :]).ravel()
+"""The log ratio of each pair of levels, ``after * 256 + before`` (float32, as it is taken of
+the pixels): a pair's rank among them stands for its ratio, and ranks sort by counting."""
+_BY_RATIO = np.argsort(_PAIR_RATIO, kind="stable")
+_RATIO_RANK = np.empty(_PAIR_RATIO.size, np.uint16)
+_RATIO_RANK[_BY_RATIO] = np.arange(_PAIR_RATIO.size)
+
+
+def _median_ratio(ranks: np.ndarray) -> np.ndarray:
+    """The median log ratio of each row of pairs (``ranks``: their :data:`_RATIO_RANK`), as
+    ``np.median`` takes it of the ratios themselves (float32): 16-bit ranks sort by counting,
+    nearly twice as fast as numpy selects among the ratios."""
+    n = ranks.shape[1]
+    middle = np.sort(ranks, axis=1, kind="stable")[:, [(n - 1) // 2, n // 2]]
+    return _PAIR_RATIO[_BY_RATIO[middle]].mean(axis=1)
+
+
 def _log_ratios(before: np.ndarray, after: np.ndarray, ok: np.ndarray,
                 settings: PropagationSettings) -> np.ndarray | None:
-    """How much brighter ``after`` is than ``before`` (grey or BGR, paired by the flow), per
-    channel: the median log ratio at the pixels ``ok`` (the background's, measurable in both),
-    among the pairs that match on every channel once the ratios are applied; None when under
-    a quarter of them match (the flow paired different things: Muybridge's plates, a cut)."""
+    """How much brighter ``after`` is than ``before`` (grey or BGR, uint8, paired by the flow),
+    per channel: the median log ratio at the pixels ``ok`` (the background's, measurable in
+    both), among the pairs that match on every channel once the ratios are applied; None when
+    under a quarter of them match (the flow paired different things: Muybridge's plates, a
+    cut)."""
     n = int(ok.sum())
     if n < 64:
         return None
-    b = before[ok].reshape(n, -1).T.astype(np.float32)
-    a = after[ok].reshape(n, -1).T.astype(np.float32)
-    ratio = np.log(a) - np.log(b)
-    gains = np.exp([np.median(r) for r in ratio]).astype(np.float32)
-    same = (np.abs(a - gains[:, None] * b) < settings.trust_grey).all(axis=0)
+    b = before[ok].reshape(n, -1).T
+    a = after[ok].reshape(n, -1).T
+    ranks = _RATIO_RANK[(a.astype(np.uint16) << 8) | b]
+    gains = np.exp(_median_ratio(ranks))
+    same = (np.abs(a.astype(np.float32) - gains[:, None] * b.astype(np.float32))
+            < settings.trust_grey).all(axis=0)
     if same.sum() < max(64, n // 4):
         return None
-    return np.array([np.median(r[same]) for r in ratio])
+    return _median_ratio(ranks[:, same])
 
 
 def exposure_ratio(before: np.ndarray, after: np.ndarray, ok: np.ndarray,
@@ -78,11 +99,15 @@ def balance_change(before: np.ndarray, after: np.ndarray, background: np.ndarray
 
 
 def _levels(image: np.ndarray, ok: np.ndarray) -> np.ndarray | None:
-    """The median level of each channel (grey: one) at the pixels ``ok``; None when too few."""
+    """The median level of each channel (grey: one; uint8) at the pixels ``ok``, as
+    ``np.median`` takes it, by counting; None when too few."""
     n = int(ok.sum())
     if n < 64:
         return None
-    return np.array([np.median(channel) for channel in image[ok].reshape(n, -1).T])
+    counted = [np.bincount(channel, minlength=256).cumsum()
+               for channel in image[ok].reshape(n, -1).T]
+    return np.array([np.searchsorted(c, [(n - 1) // 2, n // 2], "right").mean()
+                     for c in counted])
 
 
 def background_level(grey: np.ndarray, background: np.ndarray) -> float | None:

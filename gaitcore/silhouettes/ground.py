@@ -224,6 +224,7 @@ class NearbyGround:
         self.reach, self.step = settings.nearby_reach, settings.nearby_step
         self.frames: dict[int, np.ndarray] = {}
         self.onward: dict[int, np.ndarray | None] = {}
+        self.backward: dict[int, np.ndarray] = {}  # the inverses of ``onward``'s
         self.centres: dict[int, np.ndarray] = {}
         self.latest = mask
         self.added = self.deciding = 0
@@ -239,7 +240,9 @@ class NearbyGround:
             grow = round(0.25 * max(w, h))
             off = np.ones(grey.shape, bool)
             off[max(0, y - grow):y + h + grow, max(0, x - grow):x + w + grow] = False
-            self.onward[i - 1] = camera_motion(self._grey, grey, off)
+            self.onward[i - 1] = onward = camera_motion(self._grey, grey, off)
+            if onward is not None:
+                self.backward[i - 1] = np.linalg.inv(onward)
         self._grey = grey
 
     def settle(self, mask: np.ndarray) -> None:
@@ -251,7 +254,7 @@ class NearbyGround:
         if moments["m00"] > 0:
             self.centres[i] = np.array([moments["m10"], moments["m01"]]) / moments["m00"]
         for gone in [j for j in self.frames if j < i - self.reach]:
-            for kept in (self.frames, self.onward, self.centres):
+            for kept in (self.frames, self.onward, self.backward, self.centres):
                 kept.pop(gone, None)
 
     def ratios(self, image: np.ndarray, prob: np.ndarray, window: tuple[int, int, int, int]
@@ -293,12 +296,13 @@ class NearbyGround:
         if j not in self.frames:
             return None
         step = 1 if j < i else -1
+        motions = self.onward if step == 1 else self.backward
         motion = np.eye(3)
         for k in range(j, i, step):
-            onward = self.onward.get(min(k, k + step))
-            if onward is None:
+            moved = motions.get(min(k, k + step))
+            if moved is None:
                 return None
-            motion = (onward if step == 1 else np.linalg.inv(onward)) @ motion
+            motion = moved @ motion
         return motion
 
     def _pace(self, i: int, inside: np.ndarray, window: tuple[int, int, int, int]

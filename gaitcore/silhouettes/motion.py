@@ -46,7 +46,8 @@ def camera_departure(flow: np.ndarray, off: np.ndarray, *, step: int, planes: in
     src = np.stack([xs, ys], -1).astype(np.float32)
     dst = src + flow[ys, xs]
     sampled = len(src)
-    gy, gx = np.mgrid[0 : flow.shape[0] : every, 0 : flow.shape[1] : every].astype(np.float32)
+    gy = np.arange(0, flow.shape[0], every, dtype=np.float32)[:, None]
+    gx = np.arange(0, flow.shape[1], every, dtype=np.float32)
     seen = flow[::every, ::every]
     best = None
     for _ in range(planes):

@@ -549,8 +549,8 @@ def warp_mask(mask: np.ndarray, grey_prev: np.ndarray, grey: np.ndarray,
         held = mask[y0:y1, x0:x1].astype(np.float32)
         return Warp(held, np.zeros_like(held), (x0, y0, x1, y1))
     flow = flow_of.calc(a, b, None)
-    gy, gx = np.mgrid[0 : y1 - y0, 0 : x1 - x0].astype(np.float32)
-    map_x, map_y = gx + flow[..., 0], gy + flow[..., 1]
+    map_x = np.arange(x1 - x0, dtype=np.float32) + flow[..., 0]
+    map_y = np.arange(y1 - y0, dtype=np.float32)[:, None] + flow[..., 1]
     prob = cv2.remap(mask[y0:y1, x0:x1].astype(np.float32), map_x, map_y, cv2.INTER_LINEAR,
                      borderMode=cv2.BORDER_CONSTANT, borderValue=0)
     came = cv2.remap(b, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)

@@ -1138,6 +1138,42 @@ def test_the_warp_measures_a_change_of_colour_balance():
     assert not unmeasured.balance.any() and unmeasured.balance_level is None
 
 
+@pytest.mark.parametrize("channels", [1, 3])
+def test_the_ratios_and_levels_counted_are_numpys_medians(channels):
+    """The exposure's medians are taken by counting (ranks of the pairs of levels, levels
+    themselves): on pairs with a change of exposure, odd and even counts and levels at 0, they
+    are ``np.median``'s of the log ratios and levels, to the bit."""
+    from gaitcore.silhouettes.exposure import _levels, _log_ratios
+    from gaitcore.silhouettes.propagate import PropagationSettings
+
+    settings = PropagationSettings()
+    rng = np.random.default_rng(channels)
+    shape = (61, 83) if channels == 1 else (61, 83, 3)
+    for trial in range(20):
+        before = rng.integers(17, 240, shape).astype(np.uint8)
+        gain = rng.uniform(0.7, 1.4, channels)
+        noise = rng.normal(0, 2 + trial, shape)
+        after = np.clip(before * (gain if channels == 3 else gain[0]) + noise, 0, 255
+                        ).astype(np.uint8)
+        ok = rng.random(shape[:2]) < rng.uniform(0.2, 1.0)
+        n = int(ok.sum())
+        b = before[ok].reshape(n, -1).T.astype(np.float32)
+        a = after[ok].reshape(n, -1).T.astype(np.float32)
+        with np.errstate(divide="ignore"):
+            ratio = np.log(a) - np.log(b)
+        gains = np.exp([np.median(r) for r in ratio]).astype(np.float32)
+        same = (np.abs(a - gains[:, None] * b) < settings.trust_grey).all(axis=0)
+        got = _log_ratios(before, after, ok, settings)
+        if same.sum() < max(64, n // 4):
+            assert got is None
+        else:
+            want = np.array([np.median(r[same]) for r in ratio])
+            assert got is not None and got.dtype == want.dtype
+            np.testing.assert_array_equal(got, want)
+        np.testing.assert_array_equal(
+            _levels(after, ok), [np.median(c) for c in after[ok].reshape(n, -1).T])
+
+
 def test_a_frame_is_brought_back_to_its_key_exposure():
     from gaitcore.silhouettes.exposure import exposed
 
