@@ -15,6 +15,15 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 os.environ.setdefault("PYQTGRAPH_QT_LIB", "PySide6")
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _compiled_cache(tmp_path_factory):
+    """The compiled network's cache (:func:`gaitcore.silhouettes.saliency.compiled_cache`) in
+    a folder of the run's own, for the tests and the commands they start, not the user's."""
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("GAIT_CACHE_DIR", str(tmp_path_factory.mktemp("cache")))
+        yield
+
+
 @pytest.fixture
 def artifacts_dir() -> Path:
     """Folder for screenshots and plots that a person should look at after a run."""

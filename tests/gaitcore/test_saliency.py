@@ -105,3 +105,53 @@ def test_the_first_frames_map_is_drawn_in_float32():
     inside = net.in_box(image, box, grow=0.0)[40:90, 50:120]
     assert np.array_equal(inside, net(image[40:90, 50:120], exact=True))
     assert np.abs(net(image[40:90, 50:120]) - inside).mean() < 0.05  # the same map, roughly
+
+
+def _maps(net, image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return net(image), net(image, exact=True)
+
+
+def test_the_compiled_network_is_kept_for_the_next_run_and_draws_the_same_map(
+        tmp_path, monkeypatch):
+    """A run keeps OpenVINO's copies of the network (and their compiled forms) in the cache;
+    the next one compiles from them, and draws the very same maps as a run without a cache.
+    A damaged copy is read again from the model file and written again; an empty
+    GAIT_CACHE_DIR keeps nothing."""
+    from gaitcore.silhouettes.saliency import Saliency, compiled_cache, model_path
+
+    if saliency_model() is None:
+        pytest.skip(saliency_missing())
+    image = np.random.default_rng(4).integers(0, 255, (90, 120, 3)).astype(np.uint8)
+    image[30:60, 40:90] = (40, 70, 190)
+    monkeypatch.setenv("GAIT_CACHE_DIR", "")
+    assert compiled_cache() is None
+    uncached = _maps(Saliency(model_path()), image)
+
+    monkeypatch.setenv("GAIT_CACHE_DIR", str(tmp_path / "cache"))
+    stale = tmp_path / "cache" / "openvino" / "2020.1"  # an older OpenVINO's
+    stale.mkdir(parents=True)
+    first = Saliency(model_path())
+    assert not stale.exists()
+    (kept,) = (tmp_path / "cache" / "openvino").iterdir()
+    copies = sorted(kept.glob("*.xml"))
+    assert len(copies) == 2 and all(c.with_suffix(".bin").is_file() for c in copies)
+    for got, want in zip(_maps(first, image), uncached):
+        assert np.array_equal(got, want)
+    assert list(kept.glob("*.blob"))  # compiled forms kept
+
+    again = Saliency(model_path())
+    assert all(isinstance(source, str) for source in again._sources.values())
+    for got, want in zip(_maps(again, image), uncached):
+        assert np.array_equal(got, want)
+
+    for c in copies:
+        c.write_text("<net")
+    for blob in kept.glob("*.blob"):
+        blob.unlink()
+    mended = Saliency(model_path())
+    for got, want in zip(_maps(mended, image), uncached):
+        assert np.array_equal(got, want)
+    assert all(c.stat().st_size > 100_000 for c in copies)
+    copies[0].with_suffix(".bin").write_bytes(b"\0" * 64)  # weights cut short
+    for got, want in zip(_maps(Saliency(model_path()), image), uncached):
+        assert np.array_equal(got, want)
