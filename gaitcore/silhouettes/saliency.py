@@ -135,8 +135,9 @@ class Saliency:
         fast.reshape([1, 3, FAST_SIDE, FAST_SIDE])
         networks: dict = {INPUT_SIDE: network, FAST_SIDE: fast}
         for side, where in saved.items():
-            # Written aside, then renamed: a run stopped halfway leaves no copy to be read.
-            aside = where.with_name(f"{where.stem}.{os.getpid()}.xml")
+            # Written aside (a name per process and thread: the two compiles may both mend a
+            # damaged copy), then renamed: a run stopped halfway leaves no copy to be read.
+            aside = where.with_name(f"{where.stem}.{os.getpid()}-{threading.get_ident()}.xml")
             try:
                 ov.save_model(networks[side], aside, compress_to_fp16=False)
                 aside.with_suffix(".bin").replace(where.with_suffix(".bin"))
