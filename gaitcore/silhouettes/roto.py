@@ -579,7 +579,9 @@ class RotoSegmentation:
         scripted user's ten strokes there lowered their own frame."""
         _, _, w, h = cv2.boundingRect(before)
         reach = disk(round(self.s.stroke_zone_frac * max(w, h)))
-        salient = self._network_map(small, before)
+        # Not run when no stroke lies in the network's window: it would judge nothing.
+        salient = self._network_map(small, before,
+                                    _union(strokes.get("subject"), strokes.get("background")))
         out = before > 0
         for label, band in bands.items():
             zone = cv2.dilate(band.astype(np.uint8), reach) > 0
