@@ -682,7 +682,11 @@ class RotoSegmentation:
 
     def _backward(self, key: int, stop: int, progress, done, total) -> None:
         """From key frame ``key`` down to key frame ``stop`` (included: where the pass meets
-        that key tells how far it drifted), decoding in chunks."""
+        that key tells how far it drifted). A video is decoded forward in chunks, each
+        carried last frame first (its decoder seeks only to the video's own key frames);
+        image files and frames in memory are read last frame first, so that the pass starts
+        after one frame's decoding instead of a chunk's (the 50 frames of 960x540 PNG a
+        correction carries backward: about 0.35 s)."""
         def reversed_frames() -> Iterator[Framed]:
             hi = key + 1
             while hi > stop:
@@ -690,7 +694,14 @@ class RotoSegmentation:
                 chunk = list(self._frames(lo, hi))
                 yield from reversed(chunk)
                 hi = lo
-        self._carry(self.keys[key].mask, key, reversed_frames(), self.bwd, progress, done, total)
+
+        frames: Iterable[Framed]
+        if getattr(self.source, "is_video", False):
+            frames = reversed_frames()
+        else:
+            read = ((t, self.source[t]) for t in range(key, stop - 1, -1))
+            frames = prefetched(self._shrunk(read, False), 4)
+        self._carry(self.keys[key].mask, key, frames, self.bwd, progress, done, total)
 
     def _carry(self, mask: np.ndarray, key: int, frames: Iterable[Framed], store: PackedMasks,
                progress, done, total, final: OnFinal | None = None) -> None:

@@ -164,6 +164,38 @@ def _same_masks(a, b) -> None:
     assert not changed, f"frames {changed} differ"
 
 
+class _Reads(list):
+    """Frames in memory that note the order they are read in; ``is_video`` as a video's
+    :class:`~gaitcore.footage.sources.FrameSource` says it."""
+
+    def __init__(self, frames, is_video: bool) -> None:
+        super().__init__(frames)
+        self.is_video = is_video
+        self.reads: list[int] = []
+
+    def __getitem__(self, t):
+        self.reads.append(t)
+        return super().__getitem__(t)
+
+
+def test_a_backward_pass_reads_image_files_last_first_and_a_video_in_chunks_alike():
+    frames, truth = scene(14)
+    stroke = Scribble([[60.0, 50.0]], 4, 10, "subject")
+    masks = {}
+    for is_video in (False, True):
+        clip = _Reads(frames, is_video)
+        seg = RotoSegmentation(clip, box=padded_box(truth[0]))
+        seg.run()
+        clip.reads.clear()
+        seg.correct([stroke])
+        backward = [t for t in clip.reads if t < 10]
+        masks[is_video] = _masks(seg)
+        # Frames 9 down to 0 (the key it meets): read last first, or forward as a video is
+        # decoded (in one chunk here), then carried last first.
+        assert backward == (list(range(9, -1, -1)) if not is_video else list(range(10)))
+    _same_masks(masks[False], masks[True])
+
+
 def test_erasing_a_correction_gives_back_the_masks_before_it():
     frames, truth = scene(14)
     later = Scribble([[80.0, 20.0]], 4, 10, "background")
