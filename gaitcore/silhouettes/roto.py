@@ -650,15 +650,19 @@ class RotoSegmentation:
         decoded on a thread of their own a few frames ahead: for :meth:`frame`."""
         return prefetched(self._decoded(start, self.n if stop is None else stop), 4)
 
-    def _frames(self, start: int, stop: int, *, full: bool = False
+    def _frames(self, start: int, stop: int, *, full: bool = False, last_first: bool = False
                 ) -> Generator[Framed, None, None]:
-        """Working-size frames ``(t, small, image)``, ``start <= t < stop`` in order, decoded
-        and shrunk on a thread of their own a few frames ahead (OpenCV lets go of the GIL in
-        both); ``image`` is the source frame when ``full``, else None."""
-        return prefetched(self._shrunk(self._decoded(start, stop), full), 4)
+        """Working-size frames ``(t, small, image)``, ``start <= t < stop`` in order (from
+        ``stop - 1`` down when ``last_first``: each read on its own, which only image files
+        and frames in memory do cheaply), decoded and shrunk on a thread of their own a few
+        frames ahead (OpenCV lets go of the GIL in both); ``image`` is the source frame when
+        ``full``, else None."""
+        return prefetched(self._shrunk(self._decoded(start, stop, last_first), full), 4)
 
-    def _decoded(self, start: int, stop: int
+    def _decoded(self, start: int, stop: int, last_first: bool = False
                  ) -> Generator[tuple[int, np.ndarray], None, None]:
+        if last_first:
+            return ((t, self.source[t]) for t in range(stop - 1, start - 1, -1))
         if hasattr(self.source, "iter_frames"):
             return self.source.iter_frames(start, stop)
         return ((t, self.source[t]) for t in range(start, stop))
@@ -695,12 +699,8 @@ class RotoSegmentation:
                 yield from reversed(chunk)
                 hi = lo
 
-        frames: Iterable[Framed]
-        if getattr(self.source, "is_video", False):
-            frames = reversed_frames()
-        else:
-            read = ((t, self.source[t]) for t in range(key, stop - 1, -1))
-            frames = prefetched(self._shrunk(read, False), 4)
+        frames = (reversed_frames() if getattr(self.source, "is_video", False)
+                  else self._frames(stop, key + 1, last_first=True))
         self._carry(self.keys[key].mask, key, frames, self.bwd, progress, done, total)
 
     def _carry(self, mask: np.ndarray, key: int, frames: Iterable[Framed], store: PackedMasks,
