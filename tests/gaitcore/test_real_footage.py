@@ -54,8 +54,8 @@ def test_muybridge_race_horse_whatever_the_user_drew(shared_data, tmp_path, draw
 def test_davis_from_one_box_and_scripted_strokes(shared_data, clip):
     """From the reference box alone, then one scripted stroke per 10 frames: the box alone
     must find most of the animal, and the strokes must not lower the clip by more than the
-    0.01 that chance moves a clip (README; with the salient-object network the bear reads
-    0.953 from the box and 0.952 after the strokes: a stroke has little left to mend;
+    0.01 that chance moves a clip (docs/segmentation.md; with the salient-object network the
+    bear reads 0.953 from the box and 0.952 after the strokes: a stroke has little left to mend;
     figures in docs/benchmarks.md, where the issue's targets, 0.85 and 0.92, are not all met
     yet). How fast a correction runs is the segmentation benchmark's to measure, not a timed
     assertion here."""
