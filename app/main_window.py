@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from PySide6.QtCore import QPoint, QRect, QSettings, QStandardPaths, Qt
+from PySide6.QtCore import QByteArray, QPoint, QRect, QSettings, QStandardPaths, Qt
 from PySide6.QtGui import QAction, QKeySequence, QPainter, QPixmap
 from PySide6.QtWidgets import (
     QDockWidget,
@@ -76,6 +76,7 @@ class MainWindow(QMainWindow):
                  autosave_ms: int = 60_000, remember_layout: bool = True) -> None:
         super().__init__()
         self._remember_layout = remember_layout
+        self._layout_before_large: tuple[QByteArray, list[int]] | None = None
         self.batch_table: BatchTableDialog | None = None
         self.setObjectName("mainWindow")
         self.state = AppState(self)
@@ -231,6 +232,14 @@ class MainWindow(QMainWindow):
             action.setCheckable(True)
             action.setChecked(True)
             action.toggled.connect(lambda on, k=key: self.frame_view.set_overlays(**{k: on}))
+        view.addSeparator()
+        self.large_footage_action = view.addAction("&Large footage (for segmenting)")
+        self.large_footage_action.setCheckable(True)
+        self.large_footage_action.setShortcut(QKeySequence("Ctrl+Space"))
+        self.large_footage_action.setToolTip("The footage over the whole window but the "
+                                             "timeline, to draw the box and brush strokes at "
+                                             "full size; again to bring the panels back")
+        self.large_footage_action.toggled.connect(self.set_large_footage)
         view.addSeparator()
         for dock in self.docks.values():
             view.addAction(dock.toggleViewAction())
@@ -399,6 +408,25 @@ class MainWindow(QMainWindow):
         self.setWindowTitle(f"{name}[*] — {APP_NAME}")
         self.setWindowModified(not state.undo_stack.isClean())
 
+    def set_large_footage(self, on: bool) -> None:
+        """The footage over the whole window but the timeline (the 3D viewport and the other
+        panels hidden), or the layout from before it back."""
+        if on == (self._layout_before_large is not None):
+            return
+        if on:
+            self._layout_before_large = (self.saveState(), self.views.sizes())
+            for name, dock in self.docks.items():
+                if name != "timeline":
+                    dock.hide()
+            self.viewport.hide()
+        else:
+            layout, sizes = self._layout_before_large or (self.saveState(), self.views.sizes())
+            self._layout_before_large = None
+            self.viewport.show()
+            self.restoreState(layout)
+            self.views.setSizes(sizes)
+        self.large_footage_action.setChecked(on)
+
     def _restore_layout(self) -> None:
         settings = QSettings()
         geometry, layout = settings.value("window/geometry"), settings.value("window/state")
@@ -414,7 +442,9 @@ class MainWindow(QMainWindow):
         if self._remember_layout:
             settings = QSettings()
             settings.setValue("window/geometry", self.saveGeometry())
-            settings.setValue("window/state", self.saveState())
+            # Closed with the footage large, the next start opens with the panels.
+            layout = (self._layout_before_large or (self.saveState(),))[0]
+            settings.setValue("window/state", layout)
         self.player.stop()
         self.runner.shutdown()
         self.loader.stop()

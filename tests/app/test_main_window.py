@@ -356,3 +356,40 @@ def test_one_box_around_the_animal_is_enough_to_segment(qtbot, window, canter_cl
     stack.undo()  # the segmentation
     stack.undo()  # the box
     assert window.state.project.box is None
+
+
+def test_large_footage_gives_the_footage_the_window_then_the_layout_back(qtbot, window,
+                                                                        canter_clip,
+                                                                        artifacts_dir):
+    window.open_path(canter_clip / "images")
+    wait_ready(qtbot, window)
+    shown = {name: dock.isVisible() for name, dock in window.docks.items()}
+    sizes, width = window.views.sizes(), window.frame_view.width()
+    window.large_footage_action.trigger()
+    qtbot.waitUntil(lambda: window.frame_view.width() > 2 * width)
+    assert [name for name, dock in window.docks.items() if dock.isVisible()] == ["timeline"]
+    assert not window.viewport.isVisible() and window.large_footage_action.isChecked()
+    assert window.frame_view.width() >= 0.95 * window.width()
+    window.grab().save(str(artifacts_dir / "app_large_footage.png"))
+    window.large_footage_action.trigger()
+    qtbot.waitUntil(lambda: window.viewport.isVisible())
+    assert {name: dock.isVisible() for name, dock in window.docks.items()} == shown
+    assert not window.large_footage_action.isChecked()
+    assert np.allclose(window.views.sizes(), sizes, atol=4)  # the splitter's share, as before
+
+
+def test_closed_with_the_footage_large_the_next_start_has_its_panels(qtbot, make_window):
+    from PySide6.QtCore import QSettings
+
+    first = make_window(remember_layout=True)
+    first.set_large_footage(True)
+    assert not first.docks["pcs"].isVisible()
+    first.close()
+    try:
+        again = make_window(remember_layout=True)
+        qtbot.waitUntil(lambda: again.docks["pcs"].isVisible())
+        assert again.docks["posing"].isVisible() and not again.large_footage_action.isChecked()
+    finally:
+        settings = QSettings()
+        settings.remove("window/geometry")
+        settings.remove("window/state")
