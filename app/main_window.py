@@ -411,16 +411,14 @@ class MainWindow(QMainWindow):
     def set_large_footage(self, on: bool) -> None:
         """The footage over the whole window but the timeline (the 3D viewport and the other
         panels hidden), or the layout from before it back."""
-        if on == (self._layout_before_large is not None):
-            return
-        if on:
+        if on and self._layout_before_large is None:
             self._layout_before_large = (self.saveState(), self.views.sizes())
             for name, dock in self.docks.items():
                 if name != "timeline":
                     dock.hide()
             self.viewport.hide()
-        else:
-            layout, sizes = self._layout_before_large or (self.saveState(), self.views.sizes())
+        elif not on and self._layout_before_large is not None:
+            layout, sizes = self._layout_before_large
             self._layout_before_large = None
             self.viewport.show()
             self.restoreState(layout)
