@@ -441,8 +441,8 @@ class MainWindow(QMainWindow):
             settings = QSettings()
             settings.setValue("window/geometry", self.saveGeometry())
             # Closed with the footage large, the next start opens with the panels.
-            layout = (self._layout_before_large or (self.saveState(),))[0]
-            settings.setValue("window/state", layout)
+            before = self._layout_before_large
+            settings.setValue("window/state", self.saveState() if before is None else before[0])
         self.player.stop()
         self.runner.shutdown()
         self.loader.stop()

@@ -5,11 +5,11 @@ On DAVIS bear, dog and goat, every fifth frame's reference mask is taken as a ke
 carried ten frames forward, as :class:`gaitcore.silhouettes.roto.RotoSegmentation` carries a
 key frame's cut (:func:`~gaitcore.silhouettes.propagate.warp_mask`, then
 :func:`~gaitcore.silhouettes.propagate.fuse_cut` with the key's colours); the IoU with the
-reference is averaged by distance from the key. Rows: the default settings, the same with the
-salient-object network's map of every frame's window (as the engine weighs it, there every 4th
-frame and carried between), the rule before the motion cue (colour and the warped mask only),
-the rule before the flow's trust (the warped mask blurred and weighed alike everywhere, no
-motion cue), and the warped mask alone (no colour), each measured in the same run.
+reference is averaged by distance from the key. Rows: the default settings, the rule before
+the motion cue (colour and the warped mask only), the rule before the flow's trust (the warped
+mask blurred and weighed alike everywhere, no motion cue), the default with the salient-object
+network's map of every frame's window (as the engine weighs it, there every 4th frame and
+carried between), and the warped mask alone (no colour), each measured in the same run.
 
 Run ``python -m benchmarks propagation`` to print the table and record it.
 """
@@ -59,9 +59,10 @@ def run() -> list[Section]:
         frames = [source[t] for t in range(len(refs))]
         for rule, settings in RULES.items():
             rows.append([name, rule, *_carried(frames, refs, box, settings, fuse_cut)])
-            if network is not None and settings == PropagationSettings():
-                rows.append([name, "the same with the salient-object network on every frame",
-                             *_carried(frames, refs, box, settings, _with_network(network))])
+        if network is not None:
+            rows.append([name, "default with the salient-object network on every frame",
+                         *_carried(frames, refs, box, PropagationSettings(),
+                                   _with_network(network))])
         rows.append([name, "warped mask alone (no colour)",
                      *_carried(frames, refs, box, PropagationSettings(), _warp_only)])
     notes = ["each key frame is the reference mask at the working size; its colours are learnt "
