@@ -570,7 +570,10 @@ class RotoSegmentation:
         ``stroke_zone_frac`` of the subject's side around each stroke's band (``bands``);
         beside the band, a pixel turns to the stroke's side only where the network sees what
         it sees under the stroke (``strokes``: salient, or not), and to the other side only
-        where it does not. Without the network, the cut is taken within the zone.
+        where it does not. Without the network, the cut is taken within the zone. Of what the
+        cut would change there, only the parts the band reaches change: a stroke turns the
+        wrong region it is painted on, as far as that region goes within the zone, and
+        nothing beside it.
 
         The graph cut of a corrected frame learns its colours from that whole frame, and
         near a stroke it may take what the stroke did not ask for: on DAVIS cows, a
@@ -592,9 +595,10 @@ class RotoSegmentation:
                 toward = zone & (band | alike)
                 against = zone & ~band & ~alike
             if label == "subject":
-                out = (out | (toward & cut)) & ~(against & ~cut)
+                turned = (out | (toward & cut)) & ~(against & ~cut)
             else:
-                out = (out & ~(toward & ~cut)) | (against & cut)
+                turned = (out & ~(toward & ~cut)) | (against & cut)
+            out = np.where(_touching(turned != out, band), turned, out)
         return out.astype(np.uint8)
 
     def _network_map(self, small: np.ndarray, mask: np.ndarray,
@@ -940,6 +944,14 @@ def _median_under(values: np.ndarray | None, under: np.ndarray | None) -> float 
     known = values[under]
     known = known[~np.isnan(known)]
     return float(np.median(known)) if known.size else None
+
+
+def _touching(changed: np.ndarray, band: np.ndarray) -> np.ndarray:
+    """The pixels of ``changed`` (bool) in the 8-connected parts of it that ``band`` (bool)
+    reaches."""
+    _, parts = cv2.connectedComponents(changed.view(np.uint8), connectivity=8)
+    reached = np.unique(parts[band & changed])
+    return np.isin(parts, reached[reached > 0])
 
 
 def _union(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:

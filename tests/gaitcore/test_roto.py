@@ -32,6 +32,7 @@ from gaitcore.silhouettes.propagate import (
 )
 from gaitcore.silhouettes.roto import RotoSegmentation
 from gaitcore.silhouettes.segmentation import SegmentationSettings, segment_clip
+from gaitcore.silhouettes.sketch import rasterize_strokes
 from tests.gaitcore.test_segmentation import scene
 
 
@@ -1054,31 +1055,36 @@ def test_a_box_around_more_than_the_animal_keeps_the_cut_of_what_moves():
     assert iou(first, animal(90)) > 0.9 and not (first & (sign > 0)).any()
 
 
-def test_a_stroke_changes_its_frame_near_itself_only():
-    """A corrected frame whose mask holds a wrong strip of background along the top of its
-    box, far from the background stroke painted below the body: the graph cut of the whole
-    frame would drop the strip too, but the correction keeps to the stroke's surroundings
-    (unless the zone is made to span the frame)."""
-    from gaitcore.silhouettes.propagate import PropagationSettings
-
+def test_a_stroke_turns_the_wrong_region_it_lies_on_and_nothing_beside_it():
+    """A corrected frame whose mask holds two wrong strips of background: one under the body,
+    which the background stroke is painted along, and one along the top of the box, far from
+    it. The graph cut of the whole frame would drop both; the correction drops the whole strip
+    the stroke lies on, beyond the stroke's band, and keeps the other as it was, even with a
+    zone that spans the frame (a stroke changes the region it is painted on, not what the
+    frame's cut re-learnt elsewhere)."""
     frames, truth = scene(14)
-    results = {}
-    for zone in (0.1, 10.0):
+    for zone in (PropagationSettings().stroke_zone_frac, 10.0):
         seg = RotoSegmentation(frames, box=padded_box(truth[0]),
                                settings=PropagationSettings(stroke_zone_frac=zone))
         seg.run()
         body = seg.work.shrink_mask(truth[7]).astype(np.uint8)
         x, y, w, h = cv2.boundingRect(body)
-        strip = np.zeros_like(body)
-        strip[max(0, y - 4) : y, x : x + w] = 1  # background above the back, in the mask
-        stroke_y = (y + h + 3) / seg.work.scale  # on the ground below the box, source pixels
-        seg.scribbles = (Scribble([[(x + w * 0.3) / seg.work.scale, stroke_y],
-                                   [(x + w * 0.7) / seg.work.scale, stroke_y]], 3, 7,
+        far = np.zeros_like(body)
+        far[max(0, y - 4) : y, x : x + w] = 1  # background above the back, in the mask
+        near = np.zeros_like(body)
+        near[y + h : y + h + 10, x + w // 4 : x + 3 * w // 4] = 1  # ground under the body
+        near &= 1 - body
+        stroke_y = (y + h + 5) / seg.work.scale  # along the middle of it, source pixels
+        seg.scribbles = (Scribble([[(x + w * 0.4) / seg.work.scale, stroke_y],
+                                   [(x + w * 0.6) / seg.work.scale, stroke_y]], 2, 7,
                                   "background"),)
-        assert strip.sum() > 20
-        results[zone] = seg._key_cut(7, (body | strip).astype(np.float32)).mask
-    assert results[0.1][strip > 0].all()  # far from the stroke: as it was
-    assert results[10.0][strip > 0].mean() < 0.5  # the whole frame re-cut drops it
+        band = seg.work.shrink_mask(rasterize_strokes(
+            [Scribble(sc.points_xy, sc.width_px * seg.s.stroke_reach, 7, "background")
+             for sc in seg.scribbles], seg.work.shape) > 0)
+        assert far.sum() > 20 and (near > 0).sum() > 3 * (band & (near > 0)).sum()
+        mask = seg._key_cut(7, (body | far | near).astype(np.float32)).mask
+        assert mask[far > 0].all(), zone  # far from the stroke: as it was
+        assert mask[(near > 0) & ~band].mean() < 0.2, zone  # the strip, beyond the band
 
 
 def test_a_stroke_changes_its_frame_beside_itself_only_where_the_network_agrees():
