@@ -547,21 +547,26 @@ class RotoSegmentation:
         if subject is not None and not before.any():
             return Cut(cut_first(small, self._box_around(t, subject), subject=subject,
                                  background=background, settings=self.s), 1.0)
-        bands = {}
-        for label, value in (("subject", 1.0), ("background", 0.0)):
-            mine = [sc for sc in self.scribbles if sc.frame == t and sc.label == label]
-            if mine:
-                wide = [Scribble(sc.points_xy, sc.width_px * self.s.stroke_reach, t, label)
-                        for sc in mine]
-                band = self.work.shrink_mask(rasterize_strokes(wide, self.work.shape) > 0)
-                prior[band] = value
-                bands[label] = band
+        bands = self._stroke_bands(t)
+        for label, band in bands.items():
+            prior[band] = 1.0 if label == "subject" else 0.0
         cut = cut_with_prior(small, prior, subject=subject, background=background,
                              iters=self.s.first_iters, settings=self.s)
         if not bands or not before.any():
             return Cut(cut.mask, 1.0)
         strokes = {"subject": subject, "background": background}
         return Cut(self._own_way(small, before, cut.mask > 0, bands, strokes), 1.0)
+
+    def _stroke_bands(self, t: int) -> dict[str, np.ndarray]:
+        """Around frame ``t``'s strokes of each label, the band ``stroke_reach`` times their
+        width that takes their side in the corrected frame's prior (working size, bool)."""
+        bands = {}
+        for label in ("subject", "background"):
+            wide = [Scribble(sc.points_xy, sc.width_px * self.s.stroke_reach, t, label)
+                    for sc in self.scribbles if sc.frame == t and sc.label == label]
+            if wide:
+                bands[label] = self.work.shrink_mask(rasterize_strokes(wide, self.work.shape) > 0)
+        return bands
 
     def _own_way(self, small: np.ndarray, before: np.ndarray, cut: np.ndarray,
                  bands: dict[str, np.ndarray], strokes: dict[str, np.ndarray | None]

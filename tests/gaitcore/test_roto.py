@@ -32,7 +32,6 @@ from gaitcore.silhouettes.propagate import (
 )
 from gaitcore.silhouettes.roto import RotoSegmentation
 from gaitcore.silhouettes.segmentation import SegmentationSettings, segment_clip
-from gaitcore.silhouettes.sketch import rasterize_strokes
 from tests.gaitcore.test_segmentation import scene
 
 
@@ -1078,9 +1077,7 @@ def test_a_stroke_turns_the_wrong_region_it_lies_on_and_nothing_beside_it():
         seg.scribbles = (Scribble([[(x + w * 0.4) / seg.work.scale, stroke_y],
                                    [(x + w * 0.6) / seg.work.scale, stroke_y]], 2, 7,
                                   "background"),)
-        band = seg.work.shrink_mask(rasterize_strokes(
-            [Scribble(sc.points_xy, sc.width_px * seg.s.stroke_reach, 7, "background")
-             for sc in seg.scribbles], seg.work.shape) > 0)
+        band = seg._stroke_bands(7)["background"]
         assert far.sum() > 20 and (near > 0).sum() > 3 * (band & (near > 0)).sum()
         mask = seg._key_cut(7, (body | far | near).astype(np.float32)).mask
         assert mask[far > 0].all(), zone  # far from the stroke: as it was
