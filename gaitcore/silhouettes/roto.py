@@ -897,6 +897,17 @@ class RotoSegmentation:
         with the key colours' k-means drawn from seeds 1 and 2). A pass from a key frame whose
         cut does not hold the subject (:meth:`_holds`) counts as lost: it only searched for
         the subject, and measured against that key the other pass looked all drift.
+
+        The share :meth:`_weight` gives each pass is then weighed by the pass's confidence
+        there (how far its mask stands out from its surroundings under its key's colours), as
+        two independent judges' odds multiply: where the drifts cannot tell the passes apart,
+        the mask that stands out takes the frame. The drifts are measured against the key
+        frames, and a key made by a stroke is the frame's mask before it with the stroke's
+        region turned, wrong elsewhere as it was: on DAVIS bus, a subject stroke on a frame
+        where the mask had lost the bus took part of it, the pass from frame 0, right on the
+        frames before (0.86 IoU), looked as drifted against that partial key as the pass back
+        from it, and small blobs of the latter (confidence 0 to 0.2) took those frames. Over
+        the scripted strokes that clip read 0.452, now 0.736.
         """
         f = self.fwd.get(t)
         g = None if key_frames_only or b >= self.n else self.bwd.get(t)
@@ -907,6 +918,9 @@ class RotoSegmentation:
         if f_lost != g_lost:
             return g if f_lost else f
         w = self._weight(t, a, b, f.mask, g.mask)
+        forward, backward = w * f.confidence, (1 - w) * g.confidence
+        if forward + backward > 0:
+            w = forward / (forward + backward)
         soft = (w * cv2.GaussianBlur(f.mask.astype(np.float32), (0, 0), 1.5)
                 + (1 - w) * cv2.GaussianBlur(g.mask.astype(np.float32), (0, 0), 1.5))
         return Cut((soft > 0.5).astype(np.uint8), w * f.confidence + (1 - w) * g.confidence)

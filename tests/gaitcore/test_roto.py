@@ -155,6 +155,28 @@ def test_a_pass_that_fails_at_once_near_its_key_is_found_out_by_how_far_the_pass
     assert overlap(seg._final(9).mask > 0, kept > 0) > 0.9
 
 
+def test_where_the_drifts_favour_a_pass_whose_mask_does_not_stand_out_the_other_takes_the_frame():
+    """The pass from frame 0 differs from the corrected key 10 by more than the pass back
+    from 10 differs from key 0, so by their drifts the pass back takes frame 5. There it
+    holds a blob beside the subject that does not stand out from its surroundings
+    (confidence 0.1), the pass from 0 the subject (confidence 1): the subject's mask takes
+    the frame (DAVIS bus: such blobs took the frames before a stroke that cut a partial
+    key)."""
+    frames, truth = scene(14)
+    seg = RotoSegmentation(frames, box=padded_box(truth[0]))
+    seg.run()
+    seg.correct([Scribble([[60.0, 50.0]], 4, 10, "subject")])
+    seg.fwd.put(10, Cut(np.roll(seg.keys[10].mask, 2, axis=1), 1.0))  # drifted by 2 pixels
+    seg.bwd.put(0, Cut(np.roll(seg.keys[0].mask, 1, axis=1), 1.0))  # and by 1
+    kept = seg.fwd.get(5).mask
+    _, _, w, _ = cv2.boundingRect(kept)
+    seg.fwd.put(5, Cut(kept, 1.0))
+    seg.bwd.put(5, Cut(np.roll(kept, w, axis=1), 0.1))
+    share = seg._weight(5, 0, 10, kept, seg.bwd.get(5).mask)
+    assert share < 0.5
+    assert overlap(seg._final(5).mask > 0, kept > 0) > 0.9
+
+
 def _masks(seg):
     return [seg.mask(t).copy() for t in range(seg.n)]
 
