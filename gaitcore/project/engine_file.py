@@ -9,7 +9,8 @@ The engine is derived data, not the artist's work, so it lives apart from the pr
 document: ``horse.gaitproj.d/engine.json`` (format, version, a fingerprint of what the
 segmentation depends on, the working size and the names of its arrays) and
 ``engine-table-<hash>.npy`` and ``engine-bits-<hash>.npy`` beside it: the key frames' cuts and
-the masks of the forward and backward passes, bit-packed around the subject (a
+the masks of the forward and backward passes and what the key frames' strokes turned to the
+subject, bit-packed around the subject (a
 :class:`~gaitcore.silhouettes.roto_state.RotoState`; 1.8 to 3 MB for the 540 frames of
 Muybridge's 960x540 race horse, more with more key frames), and ``engine-still-<hash>.npy``
 when the camera held still (the background learnt behind the animal, at the working size:
@@ -56,13 +57,13 @@ from gaitcore.silhouettes.roto_state import RotoState
 from gaitcore.silhouettes.segmentation import SegmentationSettings
 
 ENGINE_FORMAT = "gaitstudio-engine"
-ENGINE_VERSION = 6
+ENGINE_VERSION = 7
 """Bump when the engine's arrays, or what the propagation makes of them, change: a file of
 another version is ignored (the clip is segmented again)."""
 ENGINE_FILE = "engine.json"
-STORES = ("keys", "fwd", "bwd")
+STORES = ("keys", "fwd", "bwd", "turned")
 """The engine's masks, in the order of the table's first column: key frames' cuts, forward
-and backward passes."""
+and backward passes, what the key frames' strokes turned to the subject."""
 MAX_ENGINE_JSON_BYTES = 1 << 16
 MAX_ENGINE_ARRAY_BYTES = 16 << 30
 MAX_ENGINE_FRAMES = 10**8
@@ -145,7 +146,7 @@ def write_engine(path: str | os.PathLike, fingerprint: str, state: RotoState) ->
     """
     side = sidecar_dir(Path(path).absolute())
     tables, bits = [], []
-    for i, masks in enumerate((state.keys, state.fwd, state.bwd)):
+    for i, masks in enumerate((state.keys, state.fwd, state.bwd, state.turned)):
         table, b = masks.to_arrays()
         tables.append(np.column_stack([np.full(len(table), float(i)), table]))
         bits.append(b)
@@ -264,7 +265,8 @@ def _read(doc: JsonValue, side: Path) -> RotoState:
             raise GaitInputError("the engine's still background is not of its working size")
         still = StillBackground(np.ascontiguousarray(both[..., :3]), both[..., 3] > 0)
     states = _frame_states(arrays["states"], n) if "states" in arrays else ()
-    return RotoState(n, work, masks["keys"], masks["fwd"], masks["bwd"], still, states)
+    return RotoState(n, work, masks["keys"], masks["fwd"], masks["bwd"], masks["turned"], still,
+                     states)
 
 
 def _array(doc: JsonValue, side: Path, name: str, kind: str, ndim: int) -> np.ndarray:

@@ -55,6 +55,7 @@ from gaitcore.silhouettes.keyframe import (
 from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import (
     TOUCHING,
+    CorrectionTrack,
     Cut,
     PropagationSettings,
     WorkingSize,
@@ -153,6 +154,10 @@ class RotoSegmentation:
         :data:`STILL_FRAMES` frames sampled across the clip): what lies behind the animal,
         learnt from the frames the first cut's own pass leaves free; the clip is then
         carried again with it as a cue (:meth:`StillBackground.ratios`). Corrections keep it.
+    turned : dict of int to ndarray (rows, cols) bool
+        For each key frame whose strokes turned pixels of its mask to the subject, those
+        pixels (working size): the passes from it carry them as a cue
+        (:class:`~gaitcore.silhouettes.propagate.CorrectionTrack`).
 
     Raises
     ------
@@ -181,6 +186,7 @@ class RotoSegmentation:
         self.fwd = PackedMasks(self.work.wh[::-1])
         self.bwd = PackedMasks(self.work.wh[::-1])
         self.keys: dict[int, Cut] = {}
+        self.turned: dict[int, np.ndarray] = {}
         self.still: StillBackground | None = None
         self.saliency = saliency_model() if self.s.saliency_weight > 0 else None
 
@@ -205,6 +211,7 @@ class RotoSegmentation:
             When ``progress`` returned False.
         """
         self.keys.clear()
+        self.turned.clear()
         key_frames = sorted({0} | set(self.corrected_frames))
         self.keys[0] = self._first_cut()
         self._check_first_cut(self.keys[0].mask)
@@ -303,6 +310,7 @@ class RotoSegmentation:
         frames, self.scribbles = sorted({self.scribbles[i].frame for i in gone}), kept
         lo, hi = self.n, 0
         for k in frames:
+            self.turned.pop(k, None)
             if k == 0:
                 self.keys[0] = self._first_cut()
                 self._check_first_cut(self.keys[0].mask)
@@ -528,6 +536,20 @@ class RotoSegmentation:
         return grown_box(guess, (0, 0, small.shape[1], small.shape[0])), guess > 0
 
     def _key_cut(self, t: int, prior: np.ndarray) -> Cut:
+        """Cut corrected frame ``t`` from ``prior`` (:meth:`_key_mask`), and keep what it
+        turned to the subject (:attr:`turned`) for its passes to carry
+        (:class:`~gaitcore.silhouettes.propagate.CorrectionTrack`): with what earlier strokes
+        there turned, while it stays subject (``prior`` is then the frame's key mask)."""
+        mask = self._key_mask(t, prior) > 0
+        before = self.turned.get(t)
+        turned = mask & ~(prior > 0.5) if before is None else mask & (before | ~(prior > 0.5))
+        if turned.any():
+            self.turned[t] = turned
+        else:
+            self.turned.pop(t, None)
+        return Cut(mask.astype(np.uint8), 1.0)
+
+    def _key_mask(self, t: int, prior: np.ndarray) -> np.ndarray:
         """Cut a corrected frame: its strokes are sure labels, and the prior around them takes
         their side (a stroke painted over a wrong region turns the region, not a line); the
         cut is kept within ``stroke_zone_frac`` of the subject's side around them, the prior
@@ -545,17 +567,17 @@ class RotoSegmentation:
         prior = prior.astype(np.float32)
         before = (prior > 0.5).astype(np.uint8)
         if subject is not None and not before.any():
-            return Cut(cut_first(small, self._box_around(t, subject), subject=subject,
-                                 background=background, settings=self.s), 1.0)
+            return cut_first(small, self._box_around(t, subject), subject=subject,
+                             background=background, settings=self.s)
         bands = self._stroke_bands(t)
         for label, band in bands.items():
             prior[band] = 1.0 if label == "subject" else 0.0
         cut = cut_with_prior(small, prior, subject=subject, background=background,
                              iters=self.s.first_iters, settings=self.s)
         if not bands or not before.any():
-            return Cut(cut.mask, 1.0)
+            return cut.mask
         strokes = {"subject": subject, "background": background}
-        return Cut(self._own_way(small, before, cut.mask > 0, bands, strokes), 1.0)
+        return self._own_way(small, before, cut.mask > 0, bands, strokes)
 
     def _stroke_bands(self, t: int) -> dict[str, np.ndarray]:
         """Around frame ``t``'s strokes of each label, the band ``stroke_reach`` times their
@@ -718,6 +740,8 @@ class RotoSegmentation:
         nearby = (NearbyGround(self.s, mask) if self.still is None and self.s.nearby_weight > 0
                   else None)
         prev = grey_prev = models = exposure = salient = None
+        corrected = (CorrectionTrack(self.turned[key], self.s)
+                     if key in self.turned and self.s.correction_weight > 0 else None)
         gap, found = 0.0, False
         area = self._key_area(key)
         for t, small, grey, image in _ahead(frames, nearby):
@@ -732,8 +756,8 @@ class RotoSegmentation:
                     found = bool(cut.mask.any())
                 else:
                     cut, shown = self._step(mask, (prev, small), (grey_prev, grey), flow_of,
-                                            models, exposure, nearby, salient, gap=gap,
-                                            anchor=found)
+                                            models, exposure, nearby, salient, corrected,
+                                            gap=gap, anchor=found)
                     gap = min(gap, shown) if shown > 0 else gap
                     found = False
                 store.put(t, cut)
@@ -780,14 +804,16 @@ class RotoSegmentation:
         return key_colours(small, mask, self.s, self._stroke_masks(held)[1])
 
     def _step(self, mask, colours, greys, flow_of, models, exposure: ExposureTrack | None,
-              nearby: NearbyGround | None = None, salient: SaliencyTrack | None = None, *,
-              gap: float = 0.0, anchor: bool = False) -> tuple[Cut, float]:
+              nearby: NearbyGround | None = None, salient: SaliencyTrack | None = None,
+              corrected: CorrectionTrack | None = None, *, gap: float = 0.0,
+              anchor: bool = False) -> tuple[Cut, float]:
         """One propagated frame (``colours`` and ``greys``: the previous frame and this one),
         brought back to its key frame's exposure and colour balance (``exposure`` follows
         them) before the key's colours judge it: a camera's auto-exposure and white balance,
         or Muybridge's plates, each printed lighter or darker. What lies behind the animal
         is the clip's still background when there is one, else the pass's ``nearby`` ground;
-        what stands out in the window, the ``salient`` track's.
+        what stands out in the window, the ``salient`` track's; what a correction on the
+        key turned to the subject, the ``corrected`` track's.
 
         The mask is lost when it stands out from its surroundings less than ``lost_gap`` of
         ``gap`` (see :func:`fuse_cut`). On the frame after the subject was searched for and
@@ -812,7 +838,8 @@ class RotoSegmentation:
         cue = (None if salient is None
                else salient.step(here, warp.window, mask.shape, warp.carried))
         cut = fuse_cut(here, warp.prob, warp.trust, models, self.s, warp.motion, ground, weight,
-                       salient=cue, gap=0.0 if anchor else gap)
+                       salient=cue, corrected=None if corrected is None else corrected.step(warp),
+                       gap=0.0 if anchor else gap)
         out = np.zeros_like(mask)
         out[y0:y1, x0:x1] = cut.mask
         shown = colour_gap(models(here), cut.mask > 0) if anchor and cut.mask.any() else 0.0

@@ -23,7 +23,7 @@ from gaitcore.project.engine_file import (
     saved_frames_to_check,
     write_engine,
 )
-from gaitcore.project.roto_session import RotoSession, corrected
+from gaitcore.project.roto_session import RotoSession, corrected, erased
 from gaitcore.project.storage import load_project, save_project, sidecar_dir, write_array
 from gaitcore.silhouettes.annotations import Rect, Scribble
 from gaitcore.silhouettes.ground import StillBackground
@@ -40,6 +40,9 @@ N = SCENE_FRAMES
 KEY = Scribble([[40.0, 52.0]], 4, 5, "subject")
 """A stroke on frame 5: a key frame that bounds the range a later correction changes."""
 WRONG = Scribble([[30.0, 50.0], [70.0, 50.0]], 6, 11, "background")  # across the body
+ABOVE = Scribble([[44.0, 36.0], [54.0, 36.0]], 4, 5, "subject")
+"""A subject stroke on the grass above the back on frame 5: its cut turns pixels to the
+subject, which the passes from frame 5 carry."""
 
 
 
@@ -79,17 +82,38 @@ def test_a_reopened_project_corrects_as_the_session_that_stayed_open(scene_image
         assert session.restore(loaded) and session.silhouettes() == project.silhouettes
 
 
+def test_a_reopened_project_erases_as_the_session_that_stayed_open(scene_images, tmp_path,
+                                                                    monkeypatch):
+    """Erasing the stroke on frame 11 carries frame 5's passes across it again, with what the
+    strokes on frame 5 turned to the subject: the reopened engine holds that too (here it
+    changes no mask: the camera holds still, and what lies behind the animal outweighs it)."""
+    path = tmp_path / "horse.gaitproj"
+    project, _ = _saved_project(scene_images, path, (KEY, ABOVE, WRONG))
+    with open_frames(scene_images[0]) as source:
+        kept = erased(RotoSession.start(source, project), source, project, {2})
+        loaded = load_project(path)
+        _no_full_segmentation(monkeypatch)
+        session = erased(resumed(None, source, loaded, saved=path), source, loaded, {2})
+        assert session.silhouettes() == kept.silhouettes()
+        assert session.changed == kept.changed == (KEY.frame + 1, N)
+        after = loaded.without_scribbles({2})
+        turned, want = session.state_for(after).turned, kept.state_for(after).turned
+        assert turned.frames == want.frames == (KEY.frame,)
+        assert np.array_equal(turned.get(KEY.frame).mask, want.get(KEY.frame).mask)
+
+
 def test_the_engine_is_small_and_holds_the_masks_exactly(scene_images, tmp_path):
     path = tmp_path / "horse.gaitproj"
-    project, session = _saved_project(scene_images, path)
+    project, session = _saved_project(scene_images, path, (KEY, ABOVE))
     side = sidecar_dir(path)
     engine_bytes = sum(f.stat().st_size for f in side.glob("engine*"))
     assert 0 < engine_bytes < 64 * 1024
     state = read_engine(path, engine_fingerprint(load_project(path)))
     assert state is not None
     original = session.state_for(project)
+    assert original.turned.frames == (KEY.frame,)
     for got, want in ((state.keys, original.keys), (state.fwd, original.fwd),
-                      (state.bwd, original.bwd)):
+                      (state.bwd, original.bwd), (state.turned, original.turned)):
         assert got.frames == want.frames
         for t in want.frames:
             a, b = got.get(t), want.get(t)
@@ -235,7 +259,7 @@ def test_fuzzed_engine_files_read_as_none_or_as_masks_that_fit(tmp_path):
     """Whatever the sidecar holds, reading the engine raises nothing (issue #15's fuzzing)."""
     rng = np.random.default_rng(2)
     stores = []
-    for frames in ((0, 4), (1, 2, 3, 5), (1, 2, 3)):
+    for frames in ((0, 4), (1, 2, 3, 5), (1, 2, 3), (4,)):
         masks = PackedMasks((12, 16))
         for t in frames:
             masks.put(t, Cut((rng.random((12, 16)) > 0.5).astype(np.uint8), 0.5))
@@ -261,7 +285,7 @@ def test_fuzzed_engine_files_read_as_none_or_as_masks_that_fit(tmp_path):
     def fits(read):
         if read is None:
             return
-        for masks in (read.keys, read.fwd, read.bwd):
+        for masks in (read.keys, read.fwd, read.bwd, read.turned):
             for t in masks.frames:
                 assert 0 <= t < read.n_frames
                 assert masks.get(t).mask.shape == read.work.wh[::-1]

@@ -857,6 +857,55 @@ def test_a_subject_stroke_on_a_frame_where_the_subject_was_lost_finds_it_there()
     assert all(iou(seg.mask(t), truth[t]) > 0.8 for t in range(5))
 
 
+def _head_like_the_ground(n: int):
+    """A brown animal walking right over grass, its head the grass's colour: frames, true
+    masks and the heads' masks."""
+    rng = np.random.default_rng(5)
+    green, brown = np.array([60, 140, 70]), np.array([40, 80, 160])
+    frames, truth, heads = [], [], []
+    for t in range(n):
+        image = np.clip(rng.normal(green, 12, (150, 240, 3)), 0, 255).astype(np.uint8)
+        body, head = np.zeros((150, 240), np.uint8), np.zeros((150, 240), np.uint8)
+        cx, cy = 70 + 3 * t, 75
+        cv2.ellipse(body, (cx, cy), (36, 16), 0, 0, 360, 1, -1)
+        for foot in (cx - 22, cx + 22):
+            cv2.line(body, (foot, cy + 8), (foot, cy + 42), 1, 8)
+        cv2.circle(head, (cx + 48, cy - 14), 13, 1, -1)
+        head &= 1 - body
+        image[body > 0] = np.clip(rng.normal(brown, 10, (int(body.sum()), 3)), 0, 255)
+        image[head > 0] = np.clip(rng.normal(0.9 * green, 12, (int(head.sum()), 3)), 0, 255)
+        frames.append(image)
+        truth.append((body | head) > 0)
+        heads.append(head > 0)
+    return frames, truth, heads
+
+
+def test_what_a_correction_turned_to_the_subject_is_carried_to_the_frames_beside_it(
+        without_saliency):
+    """The animal's head is the ground's colour, so the cut from the box leaves it out, and
+    no cue tells it from the ground. The artist paints it on frame 4: that frame takes it,
+    and the passes from frame 4 carry what the stroke turned, fading, so that the frames
+    after it keep most of the head; with that cue left out they lose it within a few
+    frames."""
+    n, key = 12, 4
+    frames, truth, heads = _head_like_the_ground(n)
+    x = 70 + 3 * key + 48
+    stroke = Scribble([[x - 6.0, 61.0], [x + 6.0, 61.0]], 12, key, "subject")
+    kept = {}
+    for weight in (PropagationSettings.correction_weight, 0.0):
+        seg = RotoSegmentation(frames, box=padded_box(truth[0]),
+                               settings=PropagationSettings(correction_weight=weight))
+        seg.run()
+        assert all((seg.mask(t) & heads[t]).sum() < 0.1 * heads[t].sum() for t in range(n))
+        seg.correct([stroke])
+        assert (seg.mask(key) & heads[key]).sum() > 0.7 * heads[key].sum()
+        kept[weight] = np.mean([(seg.mask(t) & heads[t]).sum() / heads[t].sum()
+                                for t in range(key + 1, key + 5)])
+        assert all(iou(seg.mask(t), truth[t]) > 0.75 for t in range(n))
+    assert kept[PropagationSettings.correction_weight] > 0.6
+    assert kept[0.0] < kept[PropagationSettings.correction_weight] - 0.1
+
+
 def test_what_moves_unlike_the_ground_is_told_from_it_where_colour_cannot():
     """An animal of the ground's own colours, held still by a panning camera while the ground
     slides 3 pixels a frame, its mask carried 6 pixels wrong: the motion cue says subject on
