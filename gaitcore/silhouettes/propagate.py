@@ -534,12 +534,12 @@ class CorrectionTrack:
     A correction mends its own frame, but the cues that missed the subject there (the key's
     colours, the network) miss it again on the next one, and the pass loses it at once: on
     DAVIS soccerball the scripted user painted the ball four times and the clip stayed at
-    0.081 IoU; with the turned pixels carried it reads 0.804 (over 50 DAVIS clips, after
+    0.080 IoU; with the turned pixels carried it reads 0.804 (over 50 DAVIS clips, after
     one scripted stroke per 10 frames: 0.7722 -> 0.7904). Only the pixels turned to the
     subject are carried: those turned to the background, carried alike, lay where the legs
     stepped next on DAVIS dog (a background stroke on frame 0 took the clip 0.898 ->
     0.838). Faded by the flow's trust as well (:attr:`Warp.trust`), the carried pixels died
-    with a fast ball's untrusted flow (soccerball 0.081 again, the 50 clips 0.7744).
+    with a fast ball's untrusted flow (soccerball 0.080 again, the 50 clips 0.7744).
 
     Parameters
     ----------
