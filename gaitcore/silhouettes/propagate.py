@@ -664,7 +664,7 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
         SaliencyTrack`), weighed by ``saliency_weight``.
     corrected : ndarray of shape (h, w), float32, optional
         Where a correction on the key frame turned the mask to the subject, carried here and
-        faded (:meth:`~gaitcore.silhouettes.roto.RotoSegmentation.turned`), in [0, 1],
+        faded (:attr:`~gaitcore.silhouettes.roto.RotoSegmentation.turned`), in [0, 1],
         weighed by ``correction_weight``.
     gap : float, optional
         How far a mask that has not slid stands out from its surroundings under ``colours``
