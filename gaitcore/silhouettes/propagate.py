@@ -559,12 +559,13 @@ class CorrectionTrack:
         """The track carried to this frame, inside ``warp``'s window (None once faded)."""
         if self.values is None:
             return None
-        here = warp.carried(self.values) * self.fade
+        here = warp.carried(self.values)  # a new array: the track's own is reused below
+        here *= self.fade
         if not here.size or float(here.max()) < self.LEAST:
             self.values = None
             return None
         x0, y0, x1, y1 = warp.window
-        self.values = np.zeros_like(self.values)
+        self.values.fill(0.0)
         self.values[y0:y1, x0:x1] = here
         return here
 
