@@ -18,7 +18,7 @@ export PYOPENGL_PLATFORM := egl
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --disable-pip-version-check -e '.[dev]'
-	$(BIN)/python scripts/fetch_saliency_model.py resources/models
+	$(BIN)/python scripts/fetch_saliency_model.py resources/models/u2netp.onnx
 	touch $@
 
 # Blender 4.5 (bpy) pins NumPy < 2, which the project's venv cannot take: it gets its own,

