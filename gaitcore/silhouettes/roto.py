@@ -541,12 +541,9 @@ class RotoSegmentation:
         (:class:`~gaitcore.silhouettes.propagate.CorrectionTrack`): with what earlier strokes
         there turned, while it stays subject (``prior`` is then the frame's key mask)."""
         mask = self._key_mask(t, prior) > 0
-        before = self.turned.get(t)
-        turned = mask & ~(prior > 0.5) if before is None else mask & (before | ~(prior > 0.5))
+        turned = mask & ((prior <= 0.5) | self.turned.pop(t, False))
         if turned.any():
             self.turned[t] = turned
-        else:
-            self.turned.pop(t, None)
         return Cut(mask.astype(np.uint8), 1.0)
 
     def _key_mask(self, t: int, prior: np.ndarray) -> np.ndarray:
