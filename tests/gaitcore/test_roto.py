@@ -1192,6 +1192,29 @@ def test_a_stroke_changes_its_frame_beside_itself_only_where_the_network_agrees(
     assert out[40:80, 60:140].all()  # a cut that drops all: the body beside it kept
 
 
+def test_the_passes_from_a_background_stroke_drop_the_network_only_where_it_is_sure():
+    """A background stroke on what the network is sure is salient (a second animal) runs the
+    passes from its frame without the network; on what it only leans to call salient (the
+    ground between the legs, which it blurs into the body) the network stays on, and the
+    stroke's colours alone do not have to hold the body."""
+    frames, truth = scene(14)
+    seg = RotoSegmentation(frames, box=padded_box(truth[0]))
+    mask = seg.work.shrink_mask(truth[7]).astype(np.uint8)
+    x, y, w, h = cv2.boundingRect(mask)
+    stroke_y = (y + h - 2) / seg.work.scale
+    seg.scribbles = (Scribble([[(x + w * 0.4) / seg.work.scale, stroke_y],
+                               [(x + w * 0.6) / seg.work.scale, stroke_y]], 2, 7,
+                              "background"),)
+    small = np.zeros((*mask.shape, 3), np.uint8)
+    kept = {}
+    for seen in (0.6, 0.8, 0.95, 1.0):
+        seg.saliency = lambda image, seen=seen: np.full(image.shape[:2], seen, np.float32)
+        kept[seen] = seg._saliency_track(7, small, mask) is not None
+    assert kept == {0.6: True, 0.8: True, 0.95: False, 1.0: False}
+    seg.scribbles = ()
+    assert seg._saliency_track(7, small, mask) is not None  # no stroke: the network
+
+
 def _window_of(seg: RotoSegmentation, mask: np.ndarray) -> tuple[tuple[int, int], ...]:
     from gaitcore.silhouettes.propagate import window
 
