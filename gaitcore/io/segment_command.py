@@ -73,7 +73,7 @@ def add_segmentation_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--saliency-every", type=_every, default=SALIENCY_EVERY, metavar="N",
                    help="run the salient-object network every N frames, its map carried by "
                    f"the optical flow between (default {SALIENCY_EVERY}); 1 cuts best and "
-                   "takes about 2.4 times as long")
+                   "takes about 1.7 times as long")
 
 
 def segmentation_options(args: argparse.Namespace) -> dict:
