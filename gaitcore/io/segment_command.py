@@ -72,8 +72,8 @@ def add_segmentation_options(p: argparse.ArgumentParser) -> None:
                    "ways) or gmm (the paper's colour mixture, rectangles only)")
     p.add_argument("--saliency-every", type=_every, default=SALIENCY_EVERY, metavar="N",
                    help="run the salient-object network every N frames, its map carried by "
-                   f"the optical flow between (default {SALIENCY_EVERY}); 1 cuts best and "
-                   "takes about 1.7 times as long")
+                   f"the optical flow between (default {SALIENCY_EVERY}); 1 takes about 1.7 "
+                   "times as long and cuts a little better from a box alone")
 
 
 def segmentation_options(args: argparse.Namespace) -> dict:
