@@ -92,6 +92,11 @@ def corrective_stroke(mask: np.ndarray, ref: np.ndarray, frame: int) -> Scribble
     return Scribble(pts, width, frame, label)
 
 
+LOWERED_BY = 0.01
+"""A stroke lowers its clip when the clip's mean IoU falls by more than this: above one run's
+noise on a clip (a change under about 0.01 cannot be told from it)."""
+
+
 @dataclass(frozen=True)
 class ScriptedRun:
     """Scores of a scripted session.
@@ -109,6 +114,13 @@ class ScriptedRun:
     ious: np.ndarray
     legs: np.ndarray
     seconds: np.ndarray
+
+    def lowered(self, by: float = LOWERED_BY) -> int:
+        """How many strokes lowered the clip's mean IoU by more than ``by``: corrections that
+        left the artist further from the animal than before (on the 50 DAVIS clips of
+        ``docs/segmentation.md``, 25 of 337 strokes, 2026-12-02)."""
+        means = self.ious.mean(axis=1)
+        return int(np.count_nonzero(np.diff(means) < -by))
 
 
 def run_scripted_user(seg: RotoSegmentation, refs: Sequence[np.ndarray], rounds: int, *,

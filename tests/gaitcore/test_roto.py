@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from gaitcore.bench.scripted_user import (
+    ScriptedRun,
     corrective_stroke,
     iou,
     legs_iou,
@@ -348,6 +349,16 @@ def test_the_scripted_user_strokes_the_largest_wrong_region():
     assert (pts[:, 0] >= 30).all() and (pts[:, 0] < 60).all()
     assert (pts[:, 1] >= 20).all() and (pts[:, 1] < 40).all()
     assert corrective_stroke(ref, ref, 0) is None
+
+
+def test_strokes_that_lowered_the_clip_are_counted():
+    # Clip means 0.50, 0.60, 0.58, 0.575, 0.70 over four strokes: the second lowered the
+    # clip by 0.02, the third by 0.005 (under one run's noise).
+    means = np.array([0.50, 0.60, 0.58, 0.575, 0.70])
+    run = ScriptedRun(np.repeat(means[:, None], 6, axis=1), np.zeros((5, 6)), np.ones(4))
+    assert run.lowered() == 1
+    assert run.lowered(by=0.001) == 2
+    assert ScriptedRun(np.ones((1, 6)), np.ones((1, 6)), np.zeros(0)).lowered() == 0
 
 
 def test_the_scripted_user_improves_a_wrong_start(without_saliency):
