@@ -209,9 +209,9 @@ class PropagationSettings:
         3rd 0.799 (0.816); on 300 frames of 854x480, 7.5, 9.4 and 10.9 s (the network in
         bfloat16; with the first frame's map in float32, every 4th reads 0.814 (0.824)).
         On 2026-12-02, every frame read better from the box (the fifteen 0.810 against
-        0.796; bear, dog and goat 0.954 / 0.918 / 0.8495) but not after the strokes (0.836
-        against 0.833; 50 DAVIS clips 0.787 against 0.791), in 1.7 times as long (11.7-12.6 s
-        against 7.2-7.3 s).
+        0.796; bear, dog and goat 0.954 / 0.918 / 0.8495) but about the same after the
+        strokes (0.836 against 0.833; 50 DAVIS clips 0.787 against 0.791), in 1.7 times as
+        long (11.7-12.6 s against 7.2-7.3 s).
     correction_weight : float
         The log-odds a propagated frame adds where a correction turned the mask to the
         subject on its key frame, carried there by the flow (see :func:`fuse_cut`).
