@@ -46,6 +46,7 @@ def propose_alternates(
     min_gap: int = 3,
     theta: np.ndarray | None = None,
     period_frames: float | None = None,
+    forbidden: tuple[int, ...] = (),
 ) -> tuple[int, ...]:
     """Propose, for each key-image, the frame with the same silhouette in the other half-cycle.
 
@@ -59,18 +60,21 @@ def propose_alternates(
         Loop angle (see :func:`loop_angle`). When given and the clip covers a whole gait
         cycle (two turns), candidates are restricted to frames an odd number of turns of the
         loop away from the key (within a quarter turn with ``period_frames``, half a turn
-        without): on a clip of several cycles, the nearest frame may otherwise be the same
-        pose one cycle later, which resolves nothing.
+        without), where any frame is: on a clip of several cycles, the nearest frame may
+        otherwise be the same pose one cycle later, which resolves nothing.
     period_frames : float, optional
-        The diagnosis' period: one turn of the loop, half a cycle of a walk. When given, an
-        alternate must also lie an odd number of periods from its key in time, within a
-        quarter period, so it is never in the neighbouring frames, whatever the noise does
-        to the loop angle.
+        Half the gait cycle of a walk. When given, an alternate must lie an odd number of
+        these from its key in time, within a quarter of one, so it is never in the
+        neighbouring frames, whatever the noise does to the loop angle (where the loop
+        angle and the time leave no frame together, the time decides).
+    forbidden : tuple of int
+        Frames never proposed (dropped by the artist, lost, left out).
 
     Returns
     -------
     tuple of int
-        One alternate per key, in the order of ``key_frames``.
+        One alternate per key, in the order of ``key_frames``: never a key, never twice the
+        same frame.
 
     Raises
     ------
@@ -83,7 +87,7 @@ def propose_alternates(
     """
     p = np.asarray(projections, dtype=float)
     n = p.shape[0]
-    out = []
+    out: list[int] = []
     for k in key_frames:
         if not 0 <= k < n:
             raise GaitInputError(f"key frame {k} is outside the clip (0..{n - 1})")
@@ -95,6 +99,12 @@ def propose_alternates(
                 f"no frame of the other half-cycle lies {where}: the clip is too short or "
                 "too irregular to look for alternates; use a longer stretch of steady gait"
             )
+        ok[list(key_frames) + out] = False  # a frame poses one thing only
+        ok[[f for f in forbidden if 0 <= f < n]] = False
+        if not ok.any():
+            raise GaitInputError(
+                f"every frame of the other half-cycle near key {k} is already a key or an "
+                "alternate: use fewer keys, or a longer stretch of steady gait")
         d = np.where(ok, ((p - p[k]) ** 2).sum(axis=1), np.inf)
         out.append(int(np.argmin(d)))
     return tuple(out)
@@ -112,8 +122,9 @@ def _candidates(n: int, k: int, min_gap: int, theta: np.ndarray | None,
     if theta is not None and theta[-1] - theta[0] >= 2 * TWO_PI:
         # Turns of the loop between each frame and the key, modulo a gait cycle (2 turns):
         # about 1 in the other half-cycle, about 0 or 2 for the same pose a cycle away.
+        # A noisy loop (real footage) may leave no frame that both say: time alone then.
         other_half = np.abs(np.mod((theta - theta[k]) / TWO_PI, 2.0) - 1.0) <= reach
-        if period_frames is not None or np.any(ok & other_half):
+        if np.any(ok & other_half):
             ok &= other_half
     return ok
 
