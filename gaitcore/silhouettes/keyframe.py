@@ -272,6 +272,28 @@ def _spans(mask: np.ndarray, box: Box, least: float = 0.6) -> bool:
     return w >= least * box[2] and h >= least * box[3]
 
 
+MOVING_COVERED = 0.5
+"""A first cut from the salient-object network is refused when it leaves out more than this
+share of what moves unlike the camera in the box (the network took the dark rider and not the
+pale horse under it)."""
+
+
+def misses_motion(mask: np.ndarray, residuals: Sequence[np.ndarray], box: Box) -> bool:
+    """Whether ``mask`` leaves out most of what moves in ``box``: the pixels that
+    :func:`motion_residuals` (their median) calls moving, at least :data:`MOVING_COVERED` of
+    them outside the mask. False when nothing clearly moves."""
+    if not residuals:
+        return False
+    x, y, w, h = box
+    inside = np.zeros(mask.shape, bool)
+    inside[y : y + h, x : x + w] = True
+    median = np.median(residuals, axis=0) if len(residuals) > 1 else residuals[0]
+    moving = _moving(median, inside)
+    if moving is None:
+        return False
+    return int(np.count_nonzero(moving & (mask > 0))) < MOVING_COVERED * moving.sum()
+
+
 def _moving(residual: np.ndarray, inside: np.ndarray) -> np.ndarray | None:
     """Pixels in the box that move unlike the camera (Otsu's threshold of the residual in the
     box, at least half a pixel); None when that is under ``_LEAST_SHARE`` or over 90% of the

@@ -50,6 +50,7 @@ from gaitcore.silhouettes.keyframe import (
     cut_salient,
     cut_with_prior,
     grown_box,
+    misses_motion,
     motion_residuals,
 )
 from gaitcore.silhouettes.packed_masks import PackedMasks
@@ -464,8 +465,9 @@ class RotoSegmentation:
         """Frame 0 cut from the network's map of the box (:func:`cut_salient`), the strokes
         on it then applied as a correction's are (:meth:`_key_cut`). None without the
         network or a box, with the paper's rectangles (their colours are the user's
-        statement), or when the map takes next to nothing or all of the box (the GrabCut
-        then decides, and :meth:`_check_first_cut` judges it)."""
+        statement), when the map takes next to nothing or all of the box, or when it leaves
+        out most of what moves in the box (:func:`misses_motion`); the GrabCut then decides,
+        and :meth:`_check_first_cut` judges it."""
         if (self.saliency is None or self.box is None or self.subject_rects
                 or self.background_rects):
             return None
@@ -475,9 +477,19 @@ class RotoSegmentation:
         inside = small[y : y + h, x : x + w]
         if not inside.size or not EMPTY_BOX <= float(inside.mean()) <= FILLED_BOX:
             return None
+        if misses_motion(small, self._first_motion(frame, (x, y, w, h)), (x, y, w, h)):
+            return None
         if any(sc.frame == 0 for sc in self.scribbles):
             return self._key_cut(0, small.astype(np.float32))
         return Cut(small.astype(np.uint8), 1.0)
+
+    def _first_motion(self, frame: np.ndarray, box: tuple[int, int, int, int]
+                      ) -> list[np.ndarray]:
+        """:func:`motion_residuals` of frame 0 (``frame``) over the frames
+        ``motion_offsets`` after it, at the current working size (``box`` at that size)."""
+        later = [self.work.shrink(check_frame(self.source[k]))
+                 for k in self.s.motion_offsets if k < self.n]
+        return motion_residuals(self.work.shrink(frame), later, box)
 
     def _check_first_cut(self, mask: np.ndarray) -> None:
         """Refuse a first cut that fills its box (nothing in or around the box looked like
@@ -509,9 +521,7 @@ class RotoSegmentation:
         residuals: list[np.ndarray] = []
         seed = None
         if box is not None and self.s.motion_offsets:
-            later = [self.work.shrink(check_frame(self.source[k]))
-                     for k in self.s.motion_offsets if k < self.n]
-            residuals = motion_residuals(small, later, box)
+            residuals = self._first_motion(frame, box)
         elif box is None and self.subject_rects and self.background_rects:
             found = self._box_from_marks(small, rects_fg, rects_bg)
             if found is None:
