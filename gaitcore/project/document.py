@@ -60,7 +60,8 @@ class Silhouettes:
             raise GaitInputError(f"unknown silhouette origin {self.origin!r}: use one of {ORIGINS}")
         n = self.roi.crops.shape[0]
         if (self.roi.crops.ndim != 3 or self.roi.centers_xy.shape != (n, 2)
-                or self.roi.lost.shape != (n,)):
+                or self.roi.lost.shape != (n,)
+                or (self.roi.edges is not None and self.roi.edges.shape != (n,))):
             raise GaitInputError(
                 f"silhouette arrays disagree: crops {self.roi.crops.shape}, centres "
                 f"{self.roi.centers_xy.shape}, lost {self.roi.lost.shape}"
@@ -89,7 +90,9 @@ class Silhouettes:
         a, b = self.roi, other.roi
         return (self.origin == other.origin and a.scale == b.scale
                 and np.array_equal(a.crops, b.crops) and np.array_equal(a.lost, b.lost)
-                and np.array_equal(a.centers_xy, b.centers_xy, equal_nan=True))
+                and np.array_equal(a.centers_xy, b.centers_xy, equal_nan=True)
+                and (a.edges is None) == (b.edges is None)
+                and (a.edges is None or np.array_equal(a.edges, b.edges)))
 
     __hash__ = None  # type: ignore[assignment]
 

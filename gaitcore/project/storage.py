@@ -56,7 +56,7 @@ MAX_KEYS = 64
 MAX_FRAME_LIST = 100_000
 MAX_CHANNELS = 6 * 100_000
 _TEMPORARY = re.compile(r"^\.(.+)\.[0-9]+\.tmp$")
-_ARRAY_NAME = re.compile(r"^(crops|crops_packed|centers_xy|lost)-[0-9a-f]{16}\.npy$")
+_ARRAY_NAME = re.compile(r"^(crops|crops_packed|centers_xy|lost|edges)-[0-9a-f]{16}\.npy$")
 
 
 def sidecar_dir(path: str | os.PathLike) -> Path:
@@ -158,6 +158,8 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
                                       np.asarray(roi.centers_xy, dtype=np.float64)),
             "lost": write_array(side, "lost", np.asarray(roi.lost, dtype=bool)),
         }
+        if roi.edges is not None:
+            arrays["edges"] = write_array(side, "edges", np.asarray(roi.edges, dtype=np.uint8))
         sil = {"origin": project.silhouettes.origin, "scale": float(roi.scale),
                "crops_shape": list(roi.crops.shape), "arrays": arrays}
     return {
@@ -287,6 +289,7 @@ _SETTINGS = {
     "key_time_limit_s": lambda v: v.number(lo=0, lo_open=True, hi=1e9, optional=True),
     "pinned": _frames,
     "forbidden": _frames,
+    "bring_back": _frames,
 }
 """How each field of AnalysisSettings is read."""
 
@@ -389,9 +392,16 @@ def _read_silhouettes(sil: JsonValue, side: Path) -> Silhouettes:
         raise GaitInputError(f"{side / arrays.key('centers_xy').value} holds a centre that is not "
                              "a finite number on a frame where the subject was found: the "
                              "project is damaged")
+    edges = None
+    if arrays.has("edges"):  # projects saved before the frame's sides were kept have none
+        edges = _read_array(side, arrays.key("edges"), "u", 1)
+        if edges.dtype != np.uint8 or edges.max(initial=0) > 15:
+            raise GaitInputError(f"{side / arrays.key('edges').value} does not hold one set of "
+                                 "frame sides per frame: the project is damaged")
     scale = sil.key("scale").number(lo=0, lo_open=True, hi=MAX_PIXELS)
     origin = sil.key("origin").text(choices=ORIGINS)
-    return Silhouettes(RoiClip(crops=crops, centers_xy=centers, lost=lost, scale=scale), origin)
+    return Silhouettes(RoiClip(crops=crops, centers_xy=centers, lost=lost, scale=scale,
+                               edges=edges), origin)
 
 
 def _read_array(side: Path, name: JsonValue, kind: str, ndim: int) -> np.ndarray:

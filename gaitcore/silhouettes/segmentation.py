@@ -283,7 +283,7 @@ def _collect(acc: RoiAccumulator, found, shape: tuple[int, int], t: int,
     if found is None:
         acc.add_lost()
     else:
-        acc.add(*found)
+        acc.add(*found, frame_shape=shape)
     if mask_sink is not None:
         mask_sink(t, full_frame_mask(found, shape))
 

@@ -154,7 +154,7 @@ def crop_sketches(
         else:
             m = cv2.moments(mask, binaryImage=True)
             acc.add(mask[y : y + h, x : x + w] > 0, np.array([x, y, w, h]),
-                    np.array([m["m10"] / m["m00"], m["m01"] / m["m00"]]))
+                    np.array([m["m10"] / m["m00"], m["m01"] / m["m00"]]), frame_shape=shape)
         report(progress, t + 1, n_frames, "sketch cropping cancelled")
     return acc.finish(margin=margin, max_side=max_side)
 

@@ -25,6 +25,36 @@ WORK_SIDE_PX = 160
 """Longer side, in pixels, of the ROI crops the analysis works on (the PCA working size): small
 enough that a long clip's silhouettes fit in memory, large enough to keep the legs."""
 
+EDGE_LEFT, EDGE_TOP, EDGE_RIGHT, EDGE_BOTTOM = 1, 2, 4, 8
+"""Bits of :attr:`RoiClip.edges`: the sides of the frame a silhouette is cut by."""
+EDGE_NAMES = {EDGE_LEFT: "left", EDGE_TOP: "top", EDGE_RIGHT: "right", EDGE_BOTTOM: "bottom"}
+
+EDGE_CONTACT = 0.1
+"""A silhouette is cut by a side of the frame when it lies along it over at least this share
+of its own extent that way (a hoof that touches the bottom is not cut; a body half out of
+the view is)."""
+
+
+def frame_edges(crop: np.ndarray, box: np.ndarray | tuple, frame_shape: tuple[int, int]) -> int:
+    """The sides of a ``frame_shape`` (rows, cols) frame that cut a silhouette, as
+    :data:`EDGE_LEFT` | ... bits (0: none).
+
+    Parameters
+    ----------
+    crop : ndarray of shape (h, w), bool
+        The silhouette inside its bounding box.
+    box : (x, y, w, h)
+        The bounding box in the frame.
+    frame_shape : (rows, cols)
+    """
+    x, y, w, h = (int(v) for v in box)
+    rows, cols = frame_shape
+    c = np.asarray(crop, dtype=bool)
+    sides = ((EDGE_LEFT, x <= 0, c[:, 0], h), (EDGE_TOP, y <= 0, c[0, :], w),
+             (EDGE_RIGHT, x + w >= cols, c[:, -1], h), (EDGE_BOTTOM, y + h >= rows, c[-1, :], w))
+    return sum(bit for bit, touches, line, extent in sides
+               if touches and np.count_nonzero(line) >= EDGE_CONTACT * extent)
+
 
 @dataclass(frozen=True, eq=False)
 class RoiClip:
@@ -41,12 +71,16 @@ class RoiClip:
         Frames where no component was found; their crop is empty.
     scale : float
         Crop pixels per source pixel (1.0 unless the window was shrunk to a working size).
+    edges : ndarray of shape (n,), uint8, or None
+        The sides of the frame that cut each frame's silhouette (:func:`frame_edges` bits; 0
+        where lost); None when the frame's size was not known.
     """
 
     crops: np.ndarray
     centers_xy: np.ndarray
     lost: np.ndarray
     scale: float = 1.0
+    edges: np.ndarray | None = None
 
     @property
     def size_rc(self) -> tuple[int, int]:
@@ -133,41 +167,51 @@ class RoiAccumulator:
     Paper Section 2.2: one window size per clip, centred on the centre of mass.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, frame_shape: tuple[int, int] | None = None) -> None:
+        self.frame_shape = frame_shape
         self._items: list[tuple[np.ndarray, tuple[int, int], np.ndarray] | None] = []
         self._centers: list[np.ndarray] = []
+        self._edges: list[int] = []
 
     def __len__(self) -> int:
         return len(self._items)
 
-    def add(self, crop: np.ndarray, box: np.ndarray, center_xy: np.ndarray) -> None:
-        """Append one frame: ``crop`` (h, w) bool at ``box`` (x, y, w, h), its centre (x, y)."""
-        self._items.append(None)
-        self._centers.append(np.full(2, np.nan))
+    def add(self, crop: np.ndarray, box: np.ndarray, center_xy: np.ndarray, *,
+            frame_shape: tuple[int, int] | None = None) -> None:
+        """Append one frame: ``crop`` (h, w) bool at ``box`` (x, y, w, h), its centre (x, y);
+        ``frame_shape`` (rows, cols) of the source frame, once known, says which of its sides
+        the silhouettes touch (kept for the frames after)."""
+        if frame_shape is not None:
+            self.frame_shape = (int(frame_shape[0]), int(frame_shape[1]))
+        self.add_lost()
         self.replace(len(self) - 1, (crop, box, center_xy))
 
     def add_lost(self) -> None:
         """Append a frame where the subject was not found."""
         self._items.append(None)
         self._centers.append(np.full(2, np.nan))
+        self._edges.append(0)
 
     def copy(self) -> RoiAccumulator:
         """A copy that shares the frames' packed crops (they are never changed in place:
         :meth:`replace` puts new ones), so that keeping copies for undo costs little."""
-        other = RoiAccumulator()
+        other = RoiAccumulator(self.frame_shape)
         other._items, other._centers = list(self._items), list(self._centers)
+        other._edges = list(self._edges)
         return other
 
     def replace(self, t: int, found: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> None:
         """Put frame ``t`` again: ``found`` is ``(crop, box, center_xy)`` as for :meth:`add`,
         or None where the subject was lost (a correction re-cut the frame)."""
         if found is None:
-            self._items[t], self._centers[t] = None, np.full(2, np.nan)
+            self._items[t], self._centers[t], self._edges[t] = None, np.full(2, np.nan), 0
             return
         crop, box, center_xy = found
         crop = np.asarray(crop, dtype=bool)
         self._items[t] = (np.packbits(crop, axis=None), crop.shape, np.asarray(box, int))
         self._centers[t] = np.asarray(center_xy, dtype=float)
+        self._edges[t] = (0 if self.frame_shape is None
+                          else frame_edges(crop, box, self.frame_shape))
 
     def finish(self, *, margin: float = 0.05, max_side: int | None = None) -> RoiClip:
         """Cut the fixed-size windows.
@@ -218,7 +262,9 @@ class RoiAccumulator:
                 crops[t] = small >= 128
             else:
                 crops[t] = window != 0
-        return RoiClip(crops=crops, centers_xy=centers, lost=lost, scale=float(scale))
+        edges = None if self.frame_shape is None else np.array(self._edges, dtype=np.uint8)
+        return RoiClip(crops=crops, centers_xy=centers, lost=lost, scale=float(scale),
+                       edges=edges)
 
 
 def track_subject(
@@ -325,7 +371,7 @@ def crop_rois(
         if found is None:
             acc.add_lost()
         else:
-            acc.add(*found)
+            acc.add(*found, frame_shape=mask.shape)
         report(progress, t + 1, total, "subject tracking cancelled")
     return acc.finish(margin=margin, max_side=max_side)
 
@@ -370,7 +416,8 @@ def stabilize_rois(roi: RoiClip, period_frames: float) -> RoiClip:
         y0, x0 = pad_y + shift[f, 1], pad_x + shift[f, 0]
         crops[f, y0 : y0 + rows, x0 : x0 + cols] = roi.crops[f]
     centers = np.where(roi.lost[:, None], np.nan, smooth)
-    return RoiClip(crops=crops, centers_xy=centers, lost=roi.lost, scale=roi.scale)
+    return RoiClip(crops=crops, centers_xy=centers, lost=roi.lost, scale=roi.scale,
+                   edges=roi.edges)
 
 
 def _period_average(track: np.ndarray, width: int) -> np.ndarray:
