@@ -2,6 +2,12 @@
 
 A pose vector x(p) is predicted from PCA coordinates p as a weighted sum of the key poses,
 x(p) = h(p) A with h(p)_i = exp(-alpha * |p - p_i|^2) and A solving H A = X.
+
+Beyond the paper, the map interpolates the key poses' departures from their mean, x(p) =
+mean + w(p) (X - mean): where the weights sum to less than one (between keys that lie far
+apart, as a real clip's keys do) the pose falls back towards the keys' mean pose instead of
+shrinking towards zero (the rest pose, or the trunk's origin for positions). At the keys the
+interpolation stays exact; where the weights sum to one nothing changes.
 """
 
 from __future__ import annotations
@@ -113,6 +119,11 @@ class RBFPoseMap:
         return cls(key_coords=p, key_poses=x, alpha=float(alpha), clamp=clamp, _lu=lu)
 
     @property
+    def mean_pose(self) -> np.ndarray:
+        """The keys' mean pose, shape (k,): where the interpolation falls back far from them."""
+        return self.key_poses.mean(axis=0)
+
+    @property
     def n_keys(self) -> int:
         return self.key_coords.shape[0]
 
@@ -154,5 +165,7 @@ class RBFPoseMap:
         Returns
         -------
         ndarray of shape (n, k) (or (k,) for one point)
+            ``mean + w(p) (X - mean)`` (see the module's notes).
         """
-        return self.weights(coords) @ self.key_poses
+        mean = self.mean_pose
+        return mean + self.weights(coords) @ (self.key_poses - mean)

@@ -22,8 +22,19 @@ def test_matches_paper_pseudo_inverse_formula():
     q = rng.normal(size=(10, 2))
     h = np.exp(-log(2) * ((p[:, None] - p[None]) ** 2).sum(-1))
     hq = np.exp(-log(2) * ((q[:, None] - p[None]) ** 2).sum(-1))
-    expected = hq @ np.linalg.inv(h.T @ h) @ h.T @ x  # paper eq. (13)
-    np.testing.assert_allclose(RBFPoseMap.fit(p, x).predict(q), expected, atol=1e-9)
+    weights = hq @ np.linalg.inv(h.T @ h) @ h.T  # paper eq. (13)
+    rbf = RBFPoseMap.fit(p, x)
+    np.testing.assert_allclose(rbf.weights(q), weights, atol=1e-9)
+    mean = x.mean(axis=0)  # the departures from the keys' mean are interpolated
+    np.testing.assert_allclose(rbf.predict(q), mean + weights @ (x - mean), atol=1e-9)
+
+
+def test_far_from_the_keys_the_pose_falls_back_to_their_mean():
+    p = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    x = np.array([[10.0, 0.0], [12.0, 2.0], [14.0, -2.0]])
+    rbf = RBFPoseMap.fit(p, x)
+    np.testing.assert_allclose(rbf.predict(p), x, atol=1e-9)  # exact at the keys
+    np.testing.assert_allclose(rbf.predict(np.array([40.0, 40.0])), x.mean(axis=0), atol=1e-9)
 
 
 def test_clamp_limits_weights():
