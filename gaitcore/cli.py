@@ -94,8 +94,12 @@ def _add_analyze(sub) -> None:
     p.add_argument("--forbid", type=_frame_list, default=(), metavar="F,F",
                    help="frames that must not be key-images")
     p.add_argument("--paper-roi", action="store_true",
-                   help="centre each crop on its own frame's centre of mass, as the paper does "
-                   "(default: on the track averaged over one gait period)")
+                   help="one fixed-size crop centred on each frame's centre of mass, as the "
+                   "paper does (default: crops at the animal's steady height, centred on its "
+                   "smoothed track)")
+    p.add_argument("--bring-back", type=_frame_list, default=(), metavar="F,F",
+                   help="frames to analyse although the animal looks only partly in view "
+                   "there (by default they are left out)")
     p.add_argument("--key-time-limit", type=float, default=60.0, metavar="SECONDS",
                    help="time budget of the exact key search (default 60)")
     _add_frame_range(p)
@@ -118,6 +122,7 @@ def _run_analyze(args: argparse.Namespace) -> int:
         forbidden=args.forbid,
         key_time_limit_s=args.key_time_limit,
         stabilize_roi=not args.paper_roi,
+        bring_back=args.bring_back,
     )
     fps = _clip_fps(args)
     states: dict = {}
@@ -140,13 +145,18 @@ def _run_analyze(args: argparse.Namespace) -> int:
         sel = analysis.selection
         start, stop = analysis.frame_range
         print(f"frames: {analysis.n_frames}, {start} to {stop - 1} "
-              f"(subject lost in {len(analysis.lost_frames)} of them)")
+              f"(subject lost or left out in {len(analysis.lost_frames)} of them)")
         if states:
             segment_command.print_frames_to_check([states[t] for t in sorted(states)],
                                                   first_frame=args.start)
         print("variance: " + " ".join(f"{100 * v:.1f}%" for v in analysis.pca.variance_ratio))
-        print("r per PC: " + " ".join(f"{r:.2f}" for r in d.correlations))
-        print(f"period: {d.period_frames:.1f} frames; verdict: {d.verdict.value}: {d.reason}")
+        print(f"components used: {analysis.pair_name}; r: " + ", ".join(
+            f"{name} {r:.2f}" for name, r in zip(analysis.component_names, d.correlations)))
+        lagged = analysis.rhythm is not None and analysis.rhythm.lag_frames is not None
+        stride = ("" if not lagged or abs(analysis.cycle_frames - d.period_frames) < 0.5
+                  else f" (a walk's stride about {analysis.cycle_frames:.1f})")
+        print(f"period: {d.period_frames:.1f} frames{stride}; verdict: {d.verdict.value}: "
+              f"{d.reason}")
         print(f"key-images: {list(analysis.key_frames)} (cond {sel.condition_number:.3g}, "
               f"{'proven optimal' if sel.exact else 'not proven optimal'})")
         if analysis.alternate_frames is not None:
@@ -158,8 +168,11 @@ def _run_analyze(args: argparse.Namespace) -> int:
             print(f"steady gait: frames {d['start']} to {d['stop'] - 1}, cycle "
                   f"{d['period_frames']:.1f} frames, r1 = {c.r1:.2f}, r2 = {c.r2:.2f}")
         advice = analysis.advice
-        if advice is not None and advice.cause.value != "none":
-            print(f"advice: {advice.message} {advice.next_step}")
+        if advice is not None:
+            for note in advice.notes:
+                print(f"note: {note}")
+            if advice.cause.value != "none":
+                print(f"advice: {advice.message} {advice.next_step}")
         print(f"wrote {args.out / 'analysis.json'}")
     return 0
 

@@ -7,24 +7,25 @@ needs to know why, because each cause has another remedy:
   part (the legs, which carry the gait) is missing: correct or sketch the silhouettes;
 - *not side-on*: the subject's box changes shape (it turns, walks towards the camera): trim
   to the stretch where it crosses the view side-on;
-- *too few cycles*: the rhythm is there (the silhouettes come back after a period) but
-  repeats fewer than two times: a longer clip;
+- *too few cycles*: the silhouettes come back, but only after a lag longer than the clip can
+  show 1.5 times (:attr:`gaitcore.analysis.rhythm.Rhythm.slow_lag_frames`): a longer clip;
 - *no rhythm*: stable, side-on silhouettes that do not cycle: another clip.
 
 The causes are tested in that order, because each one also spoils the tests after it
-(legless silhouettes show no rhythm). Every figure is computed on the silhouette crops alone.
+(legless silhouettes show no rhythm); the first two are reported even on a usable clip.
+Every figure is computed on the silhouette crops alone.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import Enum
 
 import numpy as np
 
-from gaitcore.analysis.cycles import Cycle, repeat_distance
+from gaitcore.analysis.cycles import Cycle
 from gaitcore.analysis.spectrum import Diagnosis
-from gaitcore.analysis.verdict import MIN_CYCLES, Verdict
+from gaitcore.analysis.verdict import Verdict
 from gaitcore.silhouettes.tracking import RoiClip
 
 AREA_JUMP = 0.25
@@ -40,13 +41,6 @@ the belly, 0.13 to 0.4 for whole animals, real and synthetic)."""
 BOX_SPREAD = 1.5
 """Not side-on when the box's width/height ratio varies by more than this factor (90th over
 10th percentile; 1.07 to 1.2 for side-on gaits, 3 and more for an animal that turns)."""
-MIN_ADVISED_CYCLES = 2.0
-"""Fewer repeats of the rhythm than this earn "too few cycles"..."""
-REPEATING = 0.5
-"""... provided the silhouettes do come back after the period (their repeat distance, see
-:func:`gaitcore.analysis.cycles.repeat_distance`, is under this): otherwise there is no
-rhythm to repeat. A clip shorter than ``MIN_CYCLES`` periods cannot show it come back, and
-is too short whatever it holds."""
 
 
 class Cause(str, Enum):
@@ -94,6 +88,9 @@ class Advice:
     suggested_range : (int, int) or None
         Source frames ``start, stop`` to trim to, when that is the next step.
     cues : SilhouetteCues
+    notes : tuple of str
+        What the analysis saw and did about it whatever the cause (the animal's size
+        evened out, frames left out), one sentence each.
     """
 
     cause: Cause
@@ -101,11 +98,12 @@ class Advice:
     next_step: str
     suggested_range: tuple[int, int] | None
     cues: SilhouetteCues
+    notes: tuple[str, ...] = ()
 
     def to_dict(self) -> dict:
         return {"cause": self.cause.value, "message": self.message, "next_step": self.next_step,
                 "suggested_range": None if self.suggested_range is None
-                else list(self.suggested_range)}
+                else list(self.suggested_range), "notes": list(self.notes)}
 
 
 def silhouette_cues(crops: np.ndarray, lost: np.ndarray | None = None) -> SilhouetteCues:
@@ -146,7 +144,17 @@ def silhouette_cues(crops: np.ndarray, lost: np.ndarray | None = None) -> Silhou
 
 
 def advise(roi: RoiClip, diagnosis: Diagnosis, cycles: tuple[Cycle, ...], *,
-           first_frame: int = 0, sketched: bool = False) -> Advice:
+           first_frame: int = 0, sketched: bool = False, slow_lag: float | None = None,
+           notes: tuple[str, ...] = ()) -> Advice:
+    """Name the cause that stands in the way of a usable analysis, and the next step (see
+    :func:`advise_cause`); ``notes`` (what the framing did) are kept beside it."""
+    return replace(advise_cause(roi, diagnosis, cycles, first_frame=first_frame,
+                                sketched=sketched, slow_lag=slow_lag), notes=tuple(notes))
+
+
+def advise_cause(roi: RoiClip, diagnosis: Diagnosis, cycles: tuple[Cycle, ...], *,
+                 first_frame: int = 0, sketched: bool = False,
+                 slow_lag: float | None = None) -> Advice:
     """Name the cause that stands in the way of a usable analysis, and the next step.
 
     Parameters
@@ -162,6 +170,9 @@ def advise(roi: RoiClip, diagnosis: Diagnosis, cycles: tuple[Cycle, ...], *,
         Source frame of the cycles' frame 0.
     sketched : bool
         The silhouettes are sketches already (no point advising to sketch them).
+    slow_lag : float, optional
+        The lag after which the silhouettes come back when it is too long for the clip
+        (:attr:`gaitcore.analysis.rhythm.Rhythm.slow_lag_frames`).
 
     Returns
     -------
@@ -171,16 +182,18 @@ def advise(roi: RoiClip, diagnosis: Diagnosis, cycles: tuple[Cycle, ...], *,
     n = roi.crops.shape[0]
     best = next((c for c in cycles if c.usable), None)
     stretch = None if best is None else (best.start + first_frame, best.stop + first_frame)
-    if diagnosis.verdict is Verdict.USABLE:
+    usable = diagnosis.verdict is Verdict.USABLE
+    unstable = _instability(cues)
+    if unstable and not sketched:
+        return Advice(Cause.UNSTABLE, ("Usable, but the s" if usable else "S")
+                      + f"ilhouettes are unstable: {unstable}.",
+                      "Correct the silhouettes (strokes on the frames that jump, the legs where "
+                      "they are missing) or sketch them, then analyse again.", None, cues)
+    if usable and cues.box_spread <= BOX_SPREAD:
         if best is not None and best.stop - best.start < 0.75 * n:
             return Advice(Cause.NONE, "Usable.", f"The steadiest stretch is frames {stretch[0]} "
                           f"to {stretch[1] - 1}; trim to it for a cleaner cycle.", stretch, cues)
         return Advice(Cause.NONE, "Usable.", "", None, cues)
-    unstable = _instability(cues)
-    if unstable and not sketched:
-        return Advice(Cause.UNSTABLE, f"Silhouettes unstable: {unstable}.",
-                      "Correct the silhouettes (strokes on the frames that jump, the legs where "
-                      "they are missing) or sketch them, then analyse again.", None, cues)
     if cues.box_spread > BOX_SPREAD:
         message = (f"Not side-on: the subject's box changes shape (its width/height ratio varies "
                    f"{cues.box_spread:.1f}-fold), so the animal turns or moves towards the camera.")
@@ -189,14 +202,11 @@ def advise(roi: RoiClip, diagnosis: Diagnosis, cycles: tuple[Cycle, ...], *,
                           f"{stretch[1] - 1}, where it stays side-on.", stretch, cues)
         return Advice(Cause.NOT_SIDE_ON, message, "Choose a clip where the animal crosses the "
                       "view side-on.", None, cues)
-    repeats = diagnosis.f0 * n
-    if repeats < MIN_ADVISED_CYCLES and (
-            repeats < MIN_CYCLES or repeat_distance(roi, diagnosis.period_frames) < REPEATING):
-        period = diagnosis.period_frames
-        return Advice(Cause.TOO_FEW_CYCLES, f"Too few cycles: the rhythm (period about "
-                      f"{period:.0f} frames) repeats {repeats:.1f} times in {n} frames.",
+    if slow_lag is not None:
+        return Advice(Cause.TOO_FEW_CYCLES, f"Too few cycles: the silhouettes come back after "
+                      f"about {slow_lag:.0f} frames, {n / slow_lag:.1f} times in {n} frames.",
                       f"Use a longer clip of the same gait: at least "
-                      f"{int(np.ceil(2 * period))} frames.", None, cues)
+                      f"{int(np.ceil(2 * slow_lag))} frames.", None, cues)
     return Advice(Cause.NO_RHYTHM, "No rhythm: stable, side-on silhouettes that do not follow "
                   "one gait cycle.", "Choose a clip of a steady gait (walk, trot, gallop) seen "
                   "from the side.", stretch, cues)

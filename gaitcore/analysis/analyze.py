@@ -1,6 +1,8 @@
 """The paper's pipeline from silhouettes to animation, as two steps a script or the GUI runs.
 
-``analyze_silhouettes``: ROI crops -> PCA -> spectral diagnosis -> key-image selection ->
+``analyze_silhouettes``: ROI crops at the animal's own scale, the frames where it is only
+partly in view left out (framing.py) -> PCA -> the gait's rhythm in the components, drift
+taken out (rhythm.py) -> spectral diagnosis of the pair it lives in -> key-image selection ->
 (optionally) alternates for the switching models; beside it, the stretches of steady gait of
 the whole clip and advice that names what stands in the way. ``rekey`` redoes the keys only.
 
@@ -21,17 +23,25 @@ import numpy as np
 from gaitcore.analysis.advice import Advice, advise
 from gaitcore.analysis.alternates import loop_angle, propose_alternates
 from gaitcore.analysis.cycles import Cycle, find_cycles
+from gaitcore.analysis.framing import Framing, frame_silhouettes, framing_notes
 from gaitcore.analysis.image_pca import ImagePCA
 from gaitcore.analysis.kernel import DEFAULT_ALPHA
 from gaitcore.analysis.keyimages import KeySelection, select_key_images
-from gaitcore.analysis.spectrum import Diagnosis, diagnose
-from gaitcore.analysis.verdict import Verdict
+from gaitcore.analysis.rhythm import Rhythm, find_rhythm, longest_period
+from gaitcore.analysis.spectrum import MIN_FRAMES, Diagnosis, diagnose
+from gaitcore.analysis.verdict import no_repeat
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Progress
-from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiClip, stabilize_rois
+from gaitcore.runs import true_runs
+from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiClip
 
-N_DIAGNOSIS_PCS = 5
-"""Components kept for the spectral diagnosis table, whatever the number used to animate."""
+N_DIAGNOSIS_PCS = 8
+"""Components kept for the rhythm and the diagnosis table, whatever the number used to
+animate: on real footage the gait's pair is often not among the first two."""
+
+BRIDGED_GAP = 4
+"""Runs of at most this many frames left out inside the analysed stretch are bridged (their
+coordinates interpolated in time, as for lost frames); a longer run ends the stretch."""
 
 
 @dataclass(frozen=True)
@@ -52,13 +62,16 @@ class AnalysisSettings:
         ROI crops are shrunk (area averaging) so their longer side is at most this, to keep
         PCA cheap on long clips; None keeps full resolution.
     stabilize_roi : bool
-        Re-centre the crops on the track averaged over one gait period found by a first
-        diagnosis (:func:`gaitcore.silhouettes.tracking.stabilize_rois`), then analyse again.
+        Compare the silhouettes at the animal's steady height, centred on its smoothed track
+        (:func:`gaitcore.analysis.framing.frame_silhouettes`); False keeps the paper's one
+        fixed-size window centred on each frame's centre of mass.
     key_time_limit_s : float or None
         Time budget of the exact key search; past it the best set found is used and the
         result is reported as not proven optimal.
     pinned, forbidden : tuple of int
         Frames the artist forces into, or out of, the key set.
+    bring_back : tuple of int
+        Source frames analysed although the animal looks only partly in view there.
     """
 
     pcs: int = 2
@@ -70,6 +83,13 @@ class AnalysisSettings:
     key_time_limit_s: float | None = 60.0
     pinned: tuple[int, ...] = ()
     forbidden: tuple[int, ...] = ()
+    bring_back: tuple[int, ...] = ()
+
+    @property
+    def framing_key(self) -> tuple:
+        """The settings that change the silhouettes the PCA sees: a change of any other one
+        only needs the keys chosen again (:func:`rekey`)."""
+        return self.max_side_px, self.stabilize_roi, tuple(sorted(self.bring_back))
 
     def __post_init__(self) -> None:
         if self.pcs < 1:
@@ -91,10 +111,13 @@ class Analysis:
     pca : ImagePCA
         Fitted on the frames where the subject was found.
     projections : ndarray of shape (n, C)
-        Normalized PCA coordinates of every analysed frame (C = min(5, available)
-        components); lost frames are interpolated in time and listed in ``lost_frames``.
+        Normalized coordinates of every analysed frame on the principal components, their
+        slow drift removed, the rhythm's pair first (C = min(8, available) components;
+        ``component_names`` says which is which); frames left out are interpolated in time
+        and listed in ``lost_frames``.
     lost_frames : tuple of int
-        Source frames.
+        Source frames without a silhouette, or left out (partly in view), in the analysed
+        range.
     diagnosis : Diagnosis
     selection : KeySelection
         The key search, in rows (``key_frames`` gives source frames).
@@ -113,6 +136,14 @@ class Analysis:
         Source frame of the first silhouette given.
     advice : Advice
         What stands in the way of a usable analysis, and the one next step.
+    framing : Framing or None
+        Over every silhouette given (not only the analysed range): the frames left out and
+        the scale each was compared at.
+    rhythm : Rhythm or None
+        The drift taken out and the gait cycle found.
+    components : tuple of int
+        The principal component (0-based, by decreasing variance) behind each column of
+        ``projections``.
     """
 
     settings: AnalysisSettings
@@ -128,6 +159,35 @@ class Analysis:
     cycles: tuple[Cycle, ...] = ()
     cycle_offset: int = 0
     advice: Advice | None = None
+    framing: Framing | None = None
+    rhythm: Rhythm | None = None
+    components: tuple[int, ...] = ()
+
+    @property
+    def component_names(self) -> tuple[str, ...]:
+        """"PC3", "PC4", ...: the principal component behind each column of ``projections``."""
+        order = self.components or tuple(range(self.projections.shape[1]))
+        return tuple(f"PC{k + 1}" for k in order)
+
+    @property
+    def pair_name(self) -> str:
+        """The components used, e.g. "PC2 × PC4"."""
+        return " × ".join(self.component_names[: max(2, self.settings.pcs)])
+
+    @property
+    def cycle_frames(self) -> float:
+        """The gait cycle of a walk, frames: the diagnosis' period, or twice it when the
+        pair's loop turns twice per cycle (:attr:`Rhythm.loops_per_cycle`)."""
+        loops = 2 if self.rhythm is None else self.rhythm.loops_per_cycle
+        return float(self.diagnosis.period_frames * loops)
+
+    @property
+    def partial_frames(self) -> tuple[int, ...]:
+        """Source frames left out because the animal is only partly in view (or much smaller
+        than in its neighbours), over every silhouette given."""
+        if self.framing is None:
+            return ()
+        return tuple(int(t) + self.cycle_offset for t in np.flatnonzero(self.framing.partial))
 
     @property
     def n_frames(self) -> int:
@@ -164,8 +224,8 @@ def working_images(roi: RoiClip, max_side_px: int | None) -> np.ndarray:
     Returns
     -------
     ndarray of shape (n, rows, cols)
-        The crops themselves (bool) when they are small enough, else uint8 grey levels
-        0..255 (a quarter of the memory of floats, which matters on long clips).
+        The crops themselves (bool, or grey uint8) when they are small enough, else uint8
+        grey levels 0..255 (a quarter of the memory of floats, which matters on long clips).
     """
     crops = roi.crops
     rows, cols = crops.shape[1:]
@@ -174,8 +234,10 @@ def working_images(roi: RoiClip, max_side_px: int | None) -> np.ndarray:
         return crops
     size = (max(1, round(cols * scale)), max(1, round(rows * scale)))
     out = np.empty((crops.shape[0], size[1], size[0]), dtype=np.uint8)
+    grey = crops.dtype == np.uint8
     for i, c in enumerate(crops):
-        out[i] = cv2.resize(c.astype(np.uint8) * np.uint8(255), size, interpolation=cv2.INTER_AREA)
+        img = c if grey else c.astype(np.uint8) * np.uint8(255)
+        out[i] = cv2.resize(img, size, interpolation=cv2.INTER_AREA)
     return out
 
 
@@ -199,12 +261,14 @@ def analyze_silhouettes(
         Source frame of the first crop (when the silhouettes are of part of a clip).
     frame_range : (int, int or None), optional
         Source frames ``start <= f < stop`` to analyse (the trim; None: all). The stretches
-        of steady gait are searched over all the silhouettes all the same.
+        of steady gait are searched over all the silhouettes all the same. Within it, the
+        analysis keeps the longest stretch without frames left out (partly in view, lost),
+        runs of up to ``BRIDGED_GAP`` of them bridged.
     sketched : bool
         The silhouettes come from sketches (changes the advice of an unusable diagnosis).
     progress : callable(done, total) -> bool, optional
-        Reports the cycle search, the PCA (per crop placement) and the key search as equal
-        stages; returning False cancels with ``Cancelled``.
+        Reports the cycle search, the PCA and the key search as equal stages; returning False
+        cancels with ``Cancelled``.
 
     Raises
     ------
@@ -212,44 +276,74 @@ def analyze_silhouettes(
         A trim outside the silhouettes, too few frames for the keys, no motion.
     """
     start, stop = _trim(frame_range, first_frame, roi.crops.shape[0])
-    whole, roi = roi, _slice(roi, start, stop)
-    _check_found(roi, settings)
-    stages = 4 if settings.stabilize_roi else 3
-    cycles = find_cycles(whole, progress=_stage(progress, 0, stages))
-    pca, proj, diagnosis = _describe(roi, settings, sketched, _stage(progress, 1, stages))
-    if settings.stabilize_roi and diagnosis.verdict is not Verdict.NOT_USABLE:
-        roi = stabilize_rois(roi, diagnosis.period_frames)
-        pca, proj, diagnosis = _describe(roi, settings, sketched, _stage(progress, 2, stages))
-    theta = loop_angle(diagnosis.filtered)
+    back = tuple(f - first_frame for f in settings.bring_back)
+    framed, framing = frame_silhouettes(roi, scale=settings.stabilize_roi, bring_back=back)
+    lo, hi = _kept_stretch(framed.lost[start:stop])
+    analysed = _slice(framed, start + lo, start + hi)
+    _check_found(replace(_slice(roi, start + lo, start + hi), lost=analysed.lost), settings)
+    cycles = find_cycles(framed, progress=_stage(progress, 0, 3))
+    pca, *described = _describe(analysed, settings, sketched, _stage(progress, 1, 3))
+    origin = first_frame + start + lo
+    motion = _unkeyed(settings, pca, *described, first_frame=origin,
+                      lost_frames=tuple(int(t) + origin for t in np.nonzero(analysed.lost)[0]),
+                      cycles=cycles, cycle_offset=first_frame, framing=framing)
+    advice = advise(_slice(roi, start + lo, start + hi), motion.diagnosis, cycles,
+                    first_frame=first_frame, sketched=sketched,
+                    slow_lag=described[1].slow_lag_frames,
+                    notes=framing_notes(framing, first_frame))
+    return rekey(replace(motion, advice=advice), settings, progress=_stage(progress, 2, 3))
+
+
+def _unkeyed(settings: AnalysisSettings, pca: ImagePCA, proj: np.ndarray, rhythm: Rhythm,
+             order: tuple[int, ...], diagnosis: Diagnosis, **fields) -> Analysis:
+    """The analysis before its keys are chosen (:func:`rekey` chooses them): the loop angle
+    of the rhythm's pair, four turns of pi per gait cycle as the switching models count."""
+    theta = loop_angle(diagnosis.filtered) * (2 // max(1, rhythm.loops_per_cycle))
     for arr in (proj, theta):
         arr.setflags(write=False)
-    motion = Analysis(
-        settings=settings,
-        pca=pca,
-        projections=proj,
-        lost_frames=tuple(int(t) + first_frame + start for t in np.nonzero(roi.lost)[0]),
-        diagnosis=diagnosis,
-        selection=KeySelection(frames=(), condition_number=float("nan"), exact=False,
-                               nodes_visited=0),
-        loop_angle=theta,
-        first_frame=first_frame + start,
-        cycles=cycles,
-        cycle_offset=first_frame,
-        advice=advise(roi, diagnosis, cycles, first_frame=first_frame, sketched=sketched),
-    )
-    return rekey(motion, settings, progress=_stage(progress, stages - 1, stages))
+    none = KeySelection(frames=(), condition_number=float("nan"), exact=False, nodes_visited=0)
+    return Analysis(settings=settings, pca=pca, projections=proj, diagnosis=diagnosis,
+                    selection=none, loop_angle=theta, rhythm=rhythm, components=order,
+                    **fields)
+
+
+def _kept_stretch(left_out: np.ndarray) -> tuple[int, int]:
+    """Rows ``lo, hi`` of the longest stretch without frames left out, runs of at most
+    ``BRIDGED_GAP`` of them inside it bridged; the whole range when none is left out, or
+    when that stretch is too short to diagnose (its frames left out are then bridged)."""
+    kept = ~np.asarray(left_out, dtype=bool)
+    for a, b in true_runs(~kept):
+        if b - a <= BRIDGED_GAP and a > 0 and b < kept.size:
+            kept[a:b] = True
+    runs = true_runs(kept)
+    longest = max(runs, key=lambda r: r[1] - r[0]) if runs else (0, 0)
+    if longest[1] - longest[0] < MIN_FRAMES:
+        return 0, kept.size
+    return longest
 
 
 def _check_found(roi: RoiClip, settings: AnalysisSettings) -> None:
-    found = int(np.count_nonzero(~roi.lost))
-    if found < max(settings.keys, 2) + 1:
-        raise GaitInputError(f"only {found} frame(s) with a subject for {settings.keys} "
-                             "key-images; use a longer clip or fewer keys")
+    """Enough frames with a silhouette, and enough distinct ones, for the keys (before the
+    framing resamples them, which would make every frame differ a little)."""
+    found = np.flatnonzero(~roi.lost)
+    if found.size < max(settings.keys, 2) + 1:
+        raise GaitInputError(f"only {found.size} frame(s) with the whole subject in view for "
+                             f"{settings.keys} key-images; use a longer clip or fewer keys")
+    distinct = len({roi.crops[t].tobytes() for t in found})
+    if distinct == 1:
+        raise GaitInputError("the silhouettes of every frame are identical: there is no motion "
+                             "to analyse; check the masks, or choose a clip where the animal "
+                             "moves")
+    if distinct < max(settings.keys, 2):
+        raise GaitInputError(
+            f"only {distinct} frames have distinct silhouettes, fewer than the "
+            f"{settings.keys} key-images: use a clip where the animal moves, or fewer keys")
 
 
 def _slice(roi: RoiClip, start: int, stop: int) -> RoiClip:
     return replace(roi, crops=roi.crops[start:stop], centers_xy=roi.centers_xy[start:stop],
-                   lost=roi.lost[start:stop])
+                   lost=roi.lost[start:stop],
+                   edges=None if roi.edges is None else roi.edges[start:stop])
 
 
 def _trim(frame_range: tuple[int, int | None] | None, first_frame: int, n: int) -> tuple[int, int]:
@@ -284,22 +378,71 @@ def _stage(progress: Progress | None, index: int, count: int) -> Progress | None
 
 def _describe(
     roi: RoiClip, settings: AnalysisSettings, sketched: bool, progress: Progress | None = None
-) -> tuple[ImagePCA, np.ndarray, Diagnosis]:
-    """PCA of the crops where the subject was found, projections of every frame (lost ones
-    interpolated in time), and the spectral diagnosis."""
+) -> tuple[ImagePCA, np.ndarray, Rhythm, tuple[int, ...], Diagnosis]:
+    """PCA of the crops where the subject was found, then :func:`_rhythm_coordinates`."""
     n = roi.crops.shape[0]
     found = np.nonzero(~roi.lost)[0]
     images = working_images(roi, settings.max_side_px)
     if found.size < n:
         images = images[found]
     pca = ImagePCA.fit(images, n_components=max(N_DIAGNOSIS_PCS, settings.pcs), progress=progress)
-    proj = np.empty((n, pca.n_components))
-    proj[found] = pca.projections
+    return (pca, *_rhythm_coordinates(pca, found, n, sketched))
+
+
+def _rhythm_coordinates(pca: ImagePCA, found: np.ndarray, n: int, sketched: bool
+                        ) -> tuple[np.ndarray, Rhythm, tuple[int, ...], Diagnosis]:
+    """The rhythm in the PCA's components; the normalized, drift-free coordinates of all
+    ``n`` rows in the rhythm's order (rows not ``found`` interpolated in time); and the
+    spectral diagnosis of the rhythm's pair."""
+    if pca.n_components < 2:
+        raise GaitInputError("the silhouettes vary along a single direction only: there is no "
+                             "gait to diagnose; check the silhouettes of the clip")
+    rhythm = find_rhythm(pca.projections * np.sqrt(pca.eigenvalues))
+    order = rhythm.order
+    coords = rhythm.detrended[:, order]
+    spread = coords.std(axis=0)
+    coords = coords / np.where(spread > 0, spread, 1.0)
+    proj = np.empty((n, coords.shape[1]))
+    proj[found] = coords
     if found.size < n:
-        for k in range(pca.n_components):
-            proj[:, k] = np.interp(np.arange(n), found, pca.projections[:, k])
-    diag_input = proj if proj.shape[1] >= 2 else np.column_stack([proj, np.zeros(n)])
-    return pca, proj, diagnose(diag_input, sketched=sketched)
+        for k in range(coords.shape[1]):
+            proj[:, k] = np.interp(np.arange(n), found, coords[:, k])
+    hint = None if rhythm.period_frames is None else 1.0 / rhythm.period_frames
+    names = tuple(f"PC{k + 1}" for k in order[:2])
+    diagnosis = diagnose(proj, sketched=sketched, f0_hint=hint, names=names)
+    if rhythm.lag_frames is None and found.size >= MIN_FRAMES:
+        verdict, reason = no_repeat(found.size, longest_period(found.size),
+                                    rhythm.slow_lag_frames)
+        diagnosis = replace(diagnosis, verdict=verdict, reason=reason)
+    return proj, rhythm, order, diagnosis
+
+
+def analyze_features(features: np.ndarray, settings: AnalysisSettings = AnalysisSettings(), *,
+                     first_frame: int = 0) -> Analysis:
+    """The analysis of any per-frame feature vectors instead of silhouettes (keypoints, for
+    a benchmark's oracle): PCA, rhythm, diagnosis, keys and alternates, no framing.
+
+    Parameters
+    ----------
+    features : ndarray of shape (n, d)
+        One finite vector per frame.
+    settings : AnalysisSettings
+    first_frame : int
+        Source frame of row 0.
+
+    Raises
+    ------
+    GaitInputError
+        Too few frames or no variation.
+    """
+    x = np.asarray(features, dtype=float)
+    if x.ndim != 2 or not np.all(np.isfinite(x)):
+        raise GaitInputError("features must be a finite (frames, values) array")
+    n = x.shape[0]
+    pca = ImagePCA.fit(x.reshape(n, 1, -1), n_components=max(N_DIAGNOSIS_PCS, settings.pcs))
+    motion = _unkeyed(settings, pca, *_rhythm_coordinates(pca, np.arange(n), n, False),
+                      lost_frames=(), first_frame=first_frame, cycle_offset=first_frame)
+    return rekey(motion, settings)
 
 
 def rekey(
@@ -322,12 +465,13 @@ def rekey(
             f"{analysis.projections.shape[1]} or a clip with more motion"
         )
     coords = analysis.projections[:, : settings.pcs]
+    forbidden = _rows(settings.forbidden + analysis.lost_frames, analysis)
     selection = select_key_images(
         coords,
         settings.keys,
         alpha=settings.alpha,
         pinned=_rows(settings.pinned, analysis),
-        forbidden=_rows(settings.forbidden + analysis.lost_frames, analysis),
+        forbidden=forbidden,
         progress=progress,
         time_limit_s=settings.key_time_limit_s,
     )
@@ -335,7 +479,8 @@ def rekey(
     if settings.switching:
         try:
             rows = propose_alternates(coords, selection.frames, theta=analysis.loop_angle,
-                                      period_frames=analysis.diagnosis.period_frames)
+                                      period_frames=analysis.cycle_frames / 2,
+                                      forbidden=forbidden)
             alternates = tuple(r + analysis.first_frame for r in rows)
         except GaitInputError as exc:
             note = f"No alternates: {exc}."

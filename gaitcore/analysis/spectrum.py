@@ -54,6 +54,9 @@ class Diagnosis:
     correlations : ndarray of shape (c,)
         ``r_k``, Pearson correlation of PC_k with its band-passed version, in [-1, 1]
         (0 when either is constant).
+    periodicity_p : float
+        Fisher's test of the first two columns' loop against white noise
+        (:func:`fisher_periodicity_p`): small when they hold a rhythm.
     filtered : ndarray of shape (n, c)
         Band-passed trajectories (they may drive the animation instead of the raw ones).
     frequencies : ndarray of shape (m,)
@@ -101,7 +104,8 @@ class Diagnosis:
 
 
 def diagnose(
-    projections: np.ndarray, *, threshold: float = 0.6, sketched: bool = False
+    projections: np.ndarray, *, threshold: float = 0.6, sketched: bool = False,
+    f0_hint: float | None = None, names: tuple[str, ...] = ("PC1", "PC2"),
 ) -> Diagnosis:
     """Decide from the PC trajectories whether a clip is usable.
 
@@ -115,6 +119,13 @@ def diagnose(
     sketched : bool
         True when the silhouettes already are sketches: a failing clip is then declared not
         usable instead of suggesting to sketch it.
+    f0_hint : float, optional
+        The rhythm's frequency found from the silhouettes' repeats (cycles per frame,
+        :func:`gaitcore.analysis.rhythm.find_rhythm`), taken as ``f0``: on a clip of two or
+        three cycles a single component's spectral peak is broad and can be pulled by a
+        slow residue, while the frames' repeats time the cycle to a frame.
+    names : tuple of str
+        What the first two columns are called in the reason ("PC3", "PC5"...).
 
     Returns
     -------
@@ -159,15 +170,16 @@ def diagnose(
     n_fft = _padded_length(n)
     frequencies = np.fft.rfftfreq(n_fft)
     amplitudes_n = (2.0 / n) * np.abs(np.fft.rfft(centered, n=n_fft, axis=0))
-    f0, peak_amp = _peak_frequency(frequencies, amplitudes_n[:, 0])
+    f0, peak_amp = _peak_frequency(frequencies, amplitudes_n[:, 0], f0_hint)
     fb = _half_max_frequency(frequencies, amplitudes_n[:, 0], f0, 0.5 * peak_amp)
     half_width = abs(fb - f0)
     band = (max(0.0, f0 - 3.0 * half_width), f0 + 3.0 * half_width)
 
     filtered_n = band_pass(xn, band, centre=f0)
     correlations = np.array([_pearson(xn[:, k], filtered_n[:, k]) for k in range(c)])
-    p_value = fisher_periodicity_p(centered[:, 0])
-    verdict, reason = explain(correlations, f0, band, n, threshold, sketched, p_value)
+    pair = centered[:, :2] / np.maximum(centered[:, :2].std(axis=0), _FLAT_RTOL)
+    p_value = fisher_periodicity_p(pair[:, 0] + 1j * pair[:, 1])
+    verdict, reason = explain(correlations, f0, band, n, threshold, sketched, p_value, names)
     return Diagnosis(
         f0=float(f0),
         fb=float(fb),
@@ -188,17 +200,27 @@ def fisher_periodicity_p(signal: np.ndarray) -> float:
 
     Parameters
     ----------
-    signal : ndarray of shape (n,)
-        Mean-removed trajectory.
+    signal : ndarray of shape (n,), real or complex
+        Mean-removed trajectory; complex for a pair of them (``a + 1j * b``, each scaled to
+        unit variance): a loop that turns one way then puts its whole rhythm on one side of
+        the spectrum.
 
     Returns
     -------
     float
         p-value of Fisher's g test (Fisher 1929): g is the largest periodogram ordinate over
         the sum of the ordinates at the Fourier frequencies 1..(n-1)//2 (DC and Nyquist
-        excluded); small p means a real rhythm.
+        excluded; for a complex signal, the negative frequencies too); small p means a real
+        rhythm.
     """
-    power = np.abs(np.fft.rfft(signal)[1 : (len(signal) - 1) // 2 + 1]) ** 2
+    z = np.asarray(signal)
+    n = len(z)
+    if np.iscomplexobj(z):
+        spectrum = np.fft.fft(z)
+        bins = [k for k in range(1, n) if 2 * k != n]
+        power = np.abs(spectrum[bins]) ** 2
+    else:
+        power = np.abs(np.fft.rfft(z)[1 : (n - 1) // 2 + 1]) ** 2
     m = power.size
     total = power.sum()
     if m < 2 or total <= 0:
@@ -348,8 +370,12 @@ def _padded_length(n: int) -> int:
     return 1 << (target - 1).bit_length()
 
 
-def _peak_frequency(frequencies: np.ndarray, amplitude: np.ndarray) -> tuple[float, float]:
-    """Frequency and height of the largest non-DC amplitude, refined by a parabola."""
+def _peak_frequency(frequencies: np.ndarray, amplitude: np.ndarray,
+                    hint: float | None = None) -> tuple[float, float]:
+    """Frequency and height of the largest non-DC amplitude, refined by a parabola; or
+    ``hint`` and the amplitude there, when given."""
+    if hint is not None and np.isfinite(hint) and 0 < hint <= frequencies[-1]:
+        return float(hint), float(np.interp(hint, frequencies, amplitude))
     k = int(np.argmax(amplitude[1:])) + 1
     if k == len(amplitude) - 1:
         return float(frequencies[k]), float(amplitude[k])

@@ -49,6 +49,7 @@ def explain(
     threshold: float,
     sketched: bool,
     p_value: float,
+    names: tuple[str, ...] = ("PC1", "PC2"),
 ) -> tuple[Verdict, str]:
     """The verdict and the sentence an artist reads (paper Section 5.2, last paragraph).
 
@@ -58,16 +59,17 @@ def explain(
     """
     period = 1.0 / f0
     cycles = f0 * n
+    first, second = names[0], names[1]
     if cycles < MIN_CYCLES:
         return Verdict.NOT_USABLE, (
-            f"No gait cycle found: the strongest rhythm of PC1 (period about {period:.0f} "
+            f"No gait cycle found: the strongest rhythm of {first} (period about {period:.0f} "
             f"frames) repeats only {cycles:.1f} times in this {n}-frame clip, and at least "
             "1.5 cycles are needed. Use a longer clip of a steady gait; if the animal drifts "
             "(walks towards the camera, the camera pans), cut a part where it stays side-on."
         )
     if PERIODICITY_ALPHA < p_value <= HINT_ALPHA and cycles < FEW_CYCLES:
         return Verdict.NOT_USABLE, (
-            f"No rhythm found: PC1's strongest rhythm (period about {period:.0f} frames) "
+            f"No rhythm found: {first}'s strongest rhythm (period about {period:.0f} frames) "
             f"repeats only {cycles:.1f} times in this {n}-frame clip, too few for the test to "
             f"tell it from chance (Fisher's test p = {p_value:.2g}; {PERIODICITY_ALPHA:g} "
             f"needed). Use a longer clip of the same gait: at least {FEW_CYCLES:g} cycles "
@@ -75,27 +77,28 @@ def explain(
         )
     if p_value > PERIODICITY_ALPHA:
         return Verdict.NOT_USABLE, (
-            f"No rhythm found: the strongest frequency of PC1 is no stronger than chance "
+            f"No rhythm found: the strongest frequency of {first} and {second} is no stronger "
+            f"than chance "
             f"(Fisher's test p = {p_value:.2g}), so the silhouettes do not change with a gait "
             "cycle. Check that they show the animal (not noise or the background), or choose a "
             "clip of a steady gait seen from the side."
         )
-    verdict, text = _rhythm_verdict(r, period, threshold, sketched)
-    return verdict, text + _notes(r, verdict, band, n)
+    verdict, text = _rhythm_verdict(r, period, threshold, sketched, names)
+    return verdict, text + _notes(r, verdict, band, n, names)
 
 
 def _rhythm_verdict(r: np.ndarray, period: float, threshold: float,
-                    sketched: bool) -> tuple[Verdict, str]:
+                    sketched: bool, names: tuple[str, ...]) -> tuple[Verdict, str]:
     """Usable, try sketching or not usable, by r1 and r2 against ``threshold``."""
     figures = f"r1 = {r[0]:.2f}, r2 = {r[1]:.2f}"
     if r[0] >= threshold and r[1] >= threshold:
         verdict = Verdict.USABLE
         text = (
-            f"Usable: PC1 and PC2 follow the same rhythm, a period of {period:.1f} frames "
-            f"({figures}, both at least {threshold:.2f})."
+            f"Usable: {names[0]} and {names[1]} follow the same rhythm, a period of "
+            f"{period:.1f} frames ({figures}, both at least {threshold:.2f})."
         )
     else:
-        failing = [f"PC{k + 1}" for k in range(2) if r[k] < threshold]
+        failing = [names[k] for k in range(2) if r[k] < threshold]
         who = " and ".join(failing)
         head = (
             f"{who} {'do' if len(failing) > 1 else 'does'} not follow a single rhythm of "
@@ -117,17 +120,19 @@ def _rhythm_verdict(r: np.ndarray, period: float, threshold: float,
     return verdict, text
 
 
-def _notes(r: np.ndarray, verdict: Verdict, band: tuple[float, float], n: int) -> str:
+def _notes(r: np.ndarray, verdict: Verdict, band: tuple[float, float], n: int,
+           names: tuple[str, ...]) -> str:
     """What qualifies the verdict: later components that follow the gait, a short clip."""
     text = ""
-    loud = [k for k in range(2, len(r)) if r[k] > QUIET_CORRELATION]
+    loud = [k for k in range(2, min(len(r), 5)) if r[k] > QUIET_CORRELATION]
     if loud and verdict is Verdict.USABLE:
-        names = ", ".join(f"r{k + 1} = {r[k]:.2f}" for k in loud)
+        figures = ", ".join(f"r{k + 1} = {r[k]:.2f}" for k in loud)
         verb = "is" if len(loud) == 1 else "are"
         text += (
-            f" Note: {names} {verb} above {QUIET_CORRELATION}, the most PC3 to PC5 reach in "
-            "the paper's good clips, so some of the gait also shows in later components; "
-            "this does not change the verdict, since only PC1 and PC2 drive the animation."
+            f" Note: {figures} {verb} above {QUIET_CORRELATION}, the most the paper's good "
+            "clips reach beyond their first two components, so some of the gait also shows "
+            f"in others; this does not change the verdict, since only {names[0]} and "
+            f"{names[1]} drive the animation."
         )
     share = (min(band[1], 0.5) - band[0]) / 0.5
     floor = float(np.sqrt(np.clip(share, 0.0, 1.0)))
@@ -138,3 +143,20 @@ def _notes(r: np.ndarray, verdict: Verdict, band: tuple[float, float], n: int) -
             "verdict is unreliable, use a longer clip (60 frames or more) if you can."
         )
     return text
+
+
+def no_repeat(n: int, longest: float, slow_lag: float | None) -> tuple[Verdict, str]:
+    """The verdict on a clip whose silhouettes never come back within ``longest`` frames
+    (the longest cycle an ``n``-frame clip can show twice,
+    :data:`gaitcore.analysis.rhythm.MIN_CYCLES`), whatever its spectrum says; ``slow_lag``:
+    the longer lag after which they do come back, if any."""
+    if slow_lag is not None:
+        return Verdict.NOT_USABLE, (
+            f"No gait cycle found: the silhouettes come back only after about {slow_lag:.0f} "
+            f"frames, {n / slow_lag:.1f} times in this {n}-frame clip, and twice is needed "
+            f"to tell a gait from an animal that turns back. Use a longer clip of the same "
+            f"gait: at least {int(np.ceil(2 * slow_lag))} frames.")
+    return Verdict.NOT_USABLE, (
+        f"No gait cycle found: no silhouette comes back within {longest:.0f} frames, so the "
+        f"clip shows no gait cycle twice. Choose a clip of a steady gait seen from the side; "
+        "if the animal turns or the camera pans, trim to where it does not.")

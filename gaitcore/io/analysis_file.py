@@ -4,7 +4,11 @@ The file is plain JSON (never pickle). Frame numbers are 0-based in source order
 analysis (``--start 100 --stop 400``) has ``n_frames`` 300 rows of ``projections`` for source
 frames ``first_frame`` = 100 to 399, and its ``key_frames``, ``alternate_frames``,
 ``lost_frames`` and ``cycles`` are source frame numbers. ``fps`` is the clip's frame rate
-(null when unknown), ``period_s`` the diagnosis' period in seconds.
+(null when unknown), ``period_s`` the diagnosis' period in seconds. ``components`` names
+the principal component behind each column of ``projections`` (the rhythm's pair first,
+drift removed); ``partial_frames`` are the source frames left out because the animal is only
+partly in view; ``scales`` the factor by which each silhouette given (from source frame
+``silhouettes_first_frame`` on) was enlarged to compare them at a steady height.
 """
 
 from __future__ import annotations
@@ -58,6 +62,14 @@ def analysis_to_dict(analysis: Analysis, *, source: str = "", fps: float | None 
         "condition_number": float(analysis.selection.condition_number),
         "exact": bool(analysis.selection.exact),
         "lost_frames": [int(f) for f in analysis.lost_frames],
+        "components": list(analysis.component_names),
+        "partial_frames": list(analysis.partial_frames),
+        "cycle_frames": _finite(analysis.cycle_frames),
+        "silhouettes_first_frame": analysis.cycle_offset,
+        "scales": [] if analysis.framing is None
+        else [round(float(v), 4) for v in analysis.framing.scales],
+        "height_change": None if analysis.framing is None
+        else round(float(analysis.framing.height_change), 4),
         "cycles": [c.to_dict(analysis.cycle_offset) for c in analysis.cycles],
         "advice": None if analysis.advice is None else analysis.advice.to_dict(),
         "projections": stored(analysis.coords).tolist(),

@@ -35,7 +35,7 @@ def test_no_cell_beats_the_floor_of_its_own_keys(canter):
 def test_json_summary(canter):
     data = json.loads(json.dumps(canter.to_dict()))
     assert data["gait"] == "canter" and data["n_frames"] == 100 and data["n_angles"] == 38
-    assert len(data["correlations"]) == 5
+    assert len(data["correlations"]) >= 5  # one per component kept for the rhythm
     assert {(c["pcs"], c["keys"]) for c in data["grid"]} == {(p, k) for p in (1, 2, 3)
                                                              for k in (2, 4)}
     assert all(c["floor_deg"] <= c["mean_deg"] + 1e-3 for c in data["grid"])

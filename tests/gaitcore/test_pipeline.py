@@ -31,10 +31,9 @@ def test_progress_covers_every_stage_once(roi, streamed, stabilize):
     done = [d for d, _ in calls]
     totals = {t for _, t in calls}
     assert len(totals) == 1 and done == sorted(done)
-    stages = 4 if stabilize else 3  # cycle search, PCA (twice when stabilizing), keys
-    assert totals.pop() == stages * 1000
-    # the cycle search and both PCA passes report, each up to its end
-    assert {(stage + 1) * 1000 for stage in range(stages - 1)} <= set(done)
+    assert totals.pop() == 3 * 1000  # cycle search, PCA, keys
+    # the cycle search and the PCA report, each up to its end
+    assert {1000, 2000} <= set(done)
     np.testing.assert_array_equal(
         analysis.projections, analyze_silhouettes(roi, settings).projections)
 
