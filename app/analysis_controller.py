@@ -1,7 +1,8 @@
 """Keep the analysis in step with the project, off the GUI thread, latest request wins.
 
 The computations are :mod:`gaitcore.project.steps`' ``analyze`` and ``rekey``. A change of
-the silhouettes (or of the working size) reruns the whole analysis (PCA, diagnosis, keys); a
+the silhouettes (or of the working size, the crops' framing, the frames brought back) reruns
+the whole analysis (PCA, diagnosis, keys); a
 change of the number of PCs or keys, of pinned or dropped keys or of switching only reruns
 the key search on the projections already computed. Requests are coalesced for 80 ms (spin
 boxes) and a newer one cancels the running one; a long one (a long clip's PCA) shows its
@@ -70,7 +71,7 @@ class AnalysisController(QObject):
         current = self._state.analysis
         if current is not None and self._analysed is not None and (
                 self._analysed[0] is silhouettes and self._analysed[1] == trim
-                and current.settings.max_side_px == settings.max_side_px):
+                and current.settings.framing_key == settings.framing_key):
             job = Job(lambda progress: rekey(current, settings, progress=progress),
                       "Choosing key-images", unit=None)
         else:

@@ -166,6 +166,18 @@ class ClearKeyConstraintsCommand(ProjectCommand):
                          "clear pinned and dropped keys")
 
 
+class BringBackCommand(ProjectCommand):
+    """Analyse frames left out as partly in view (or leave them out again)."""
+
+    def __init__(self, state: AppState, frames: tuple[int, ...], back: bool = True) -> None:
+        kept = set(state.project.settings.bring_back)
+        kept = kept | set(frames) if back else kept - set(frames)
+        settings = replace(state.project.settings, bring_back=tuple(sorted(kept)))
+        what = f"frame {frames[0]}" if len(frames) == 1 else f"frames {frames[0]}–{frames[-1]}"
+        super().__init__(state, replace(state.project, settings=settings),
+                         f"{'bring back' if back else 'leave out'} {what}", frame=frames[0])
+
+
 class _FieldCommand(ProjectCommand):
     """A change of one field of a project part; consecutive changes of that field (a spin box
     held down) merge into one undo step."""

@@ -131,7 +131,7 @@ class MainWindow(QMainWindow):
                                    Qt.DockWidgetArea.BottomDockWidgetArea),
             "animation": self._dock("Animation weights", self.animation_view,
                                     Qt.DockWidgetArea.BottomDockWidgetArea),
-            "pcs": self._dock("PC1 × PC2 and key-images", self.pc_plot,
+            "pcs": self._dock("Gait loop and key-images", self.pc_plot,
                               Qt.DockWidgetArea.RightDockWidgetArea),
             "diagnosis": self._dock("Diagnosis", self.diagnosis,
                                     Qt.DockWidgetArea.RightDockWidgetArea, scroll=True),

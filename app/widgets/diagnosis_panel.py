@@ -1,8 +1,10 @@
 """Is the clip usable? The spectral diagnosis of paper Section 5.2, as in its Figure 9.
 
-The amplitude spectra of PC1..PC3, the peak function fitted to PC1 (scaled to PC1's
-maximum), the band kept by the filter (shaded), then the correlation r of every PC with its
-band-passed version, the period of the gait, the verdict and the advice in plain words.
+The amplitude spectra of the rhythm's pair and the next component (PC1..PC3 in the paper;
+on real footage often other ones, named in the legend), the peak function fitted to the
+first of them (scaled to its maximum), the band kept by the filter (shaded), then the
+correlation r of every component with its band-passed version, the period of the gait, the
+verdict and the advice in plain words, with what the analysis left out and why.
 """
 
 from __future__ import annotations
@@ -69,11 +71,15 @@ class DiagnosisPanel(QWidget):
             return
         d = analysis.diagnosis
         f, amp = d.frequencies, d.amplitudes
+        legend = self.plot.plotItem.legend
+        legend.clear()
         for k, curve in enumerate(self._curves):
             if k < amp.shape[1]:
                 curve.setData(f, amp[:, k])
+                legend.addItem(curve, analysis.component_names[k])
             else:
                 curve.setData([], [])
+        legend.addItem(self._peak, "peak fit")
         self._peak.setData(f, d.peak(f) * amp[:, 0].max())
         self._band.setRegion(d.band)
         self._f0.setValue(d.f0)
@@ -86,11 +92,13 @@ class DiagnosisPanel(QWidget):
         d = analysis.diagnosis
         colour = VERDICT_COLOURS[d.verdict]
         cells = []
+        names = analysis.component_names
         for k, r in enumerate(d.correlations):
             good = r >= THRESHOLD if k < 2 else r <= QUIET_CORRELATION
             style = "" if good else " style='color:#b00000'"
-            cells.append(f"<td{style}>PC{k + 1}&nbsp;{r:.2f}</td>")
-        variance = analysis.pca.variance_ratio * 100
+            cells.append(f"<td{style}>{names[k]}&nbsp;{r:.2f}</td>")
+        order = list(analysis.components or range(len(d.correlations)))
+        variance = analysis.pca.variance_ratio[order] * 100
         fps = self._state.fps
         period = f"{d.period_frames:.1f} frames"
         if fps:
@@ -105,14 +113,17 @@ class DiagnosisPanel(QWidget):
             steps += f"<p>{html.escape(advice.next_step)}</p>"
         if analysis.alternates_note:
             steps += f"<p style='color:#b00000'>{html.escape(analysis.alternates_note)}</p>"
+        for note in () if advice is None else advice.notes:
+            steps += f"<p>{html.escape(note)}</p>"
         return (
             f"<b style='color:{colour}; font-size:14pt'>"
             f"{html.escape(d.verdict.value.capitalize())}</b>"
             f"<table cellspacing='6'><tr><td><b>r</b></td>{''.join(cells)}</tr>"
             f"<tr><td><b>var %</b></td>"
             f"{''.join(f'<td>{v:.1f}</td>' for v in variance)}</tr></table>"
-            f"Period of PC1: <b>{period}</b>; band {d.band[0]:.3f}–{d.band[1]:.3f} cycles/frame."
-            + (f" {lost} frame(s) without a silhouette were interpolated." if lost else "")
+            f"Period of {names[0]}: <b>{period}</b>; band {d.band[0]:.3f}–{d.band[1]:.3f} "
+            "cycles/frame."
+            + (f" {lost} frame(s) without a whole silhouette were interpolated." if lost else "")
             + f" Frames {start} to {stop - 1}."
             + f"<p>{html.escape(d.reason)}</p>" + steps
             + f"<p style='color:gray'>Usable when r1 and r2 ≥ {THRESHOLD} (paper 5.2);"

@@ -1,4 +1,5 @@
-"""The PC1 x PC2 plot (paper Figure 3) with the key-image controls.
+"""The plot of the rhythm's two components (paper Figure 3's PC1 x PC2; on real footage often
+another pair, e.g. PC3 x PC5, named on its axes) with the key-image controls.
 
 The trajectory is coloured by time; key-images are orange rings, alternates cyan diamonds,
 the current frame a red cross that follows the scrubber. Clicking a point goes to its frame.
@@ -57,6 +58,7 @@ class PCPlotWidget(QWidget):
         super().__init__(parent)
         self._state = state
         self._coords = np.zeros((0, 2))
+        self._names = ("PC1", "PC2")
         self._first = 0  # source frame of the first row of _coords
         self._build_plot()
 
@@ -105,7 +107,7 @@ class PCPlotWidget(QWidget):
         self._on_analysis(None)
 
     def _build_plot(self) -> None:
-        """The PC1 x PC2 plot: the loop, its frames, the keys, alternates and the cursor."""
+        """The pair's plot: the loop, its frames, the keys, alternates and the cursor."""
         self.plot = pg.PlotWidget()
         self.plot.setLabel("bottom", "PC1")
         self.plot.setLabel("left", "PC2")
@@ -160,6 +162,12 @@ class PCPlotWidget(QWidget):
             return
         p = analysis.projections
         self._coords = np.column_stack([p[:, 0], p[:, 1] if p.shape[1] > 1 else np.zeros(len(p))])
+        names = analysis.component_names
+        self._names = (names[0], names[1] if len(names) > 1 else "")
+        self.plot.setLabel("bottom", self._names[0])
+        self.plot.setLabel("left", self._names[1])
+        self.plot.setTitle(f"{self._names[0]} × {self._names[1]}: the gait's loop"
+                           if self._names[1] else self._names[0])
         n = len(self._coords)
         cmap = pg.colormap.get("viridis")
         brushes = [pg.mkBrush(c) for c in cmap.map(np.linspace(0, 1, n), mode="qcolor")]
@@ -224,7 +232,7 @@ class PCPlotWidget(QWidget):
         self.accept_alt.setEnabled(bool(alts) and tuple(alts) != self._state.project.alternates)
 
     def _tip(self, x: float, y: float, data: int) -> str:
-        return f"frame {data}\nPC1 {x:.2f}, PC2 {y:.2f}"
+        return f"frame {data}\n{self._names[0]} {x:.2f}, {self._names[1]} {y:.2f}"
 
     # -- widgets -> commands ------------------------------------------------------------------
     def _on_clicked(self, _item, points, _event=None) -> None:

@@ -3,7 +3,9 @@
 Clicking or dragging moves the current frame. Marks: key-images (orange triangles above the
 track; the selected key outlined in red), proposed alternates (cyan outlines), accepted
 alternates (cyan triangles), pinned keys (a dot), dropped keys (a grey cross), lost frames (red
-ticks: the segmentation lost the subject there), frames to check (faint red ticks: the
+ticks: the segmentation lost the subject there), frames the analysis left out because the
+animal is only partly in view there (blue hatching; right-click one to analyse it anyway,
+or to leave it out again), frames to check (faint red ticks: the
 segmentation's confidence is low there, :attr:`~gaitcore.silhouettes.roto.FrameState.to_check`),
 frames corrected with the subject or background brush (violet bars across the track, with a
 violet diamond under it), sketched frames (yellow ticks under the track).
@@ -19,10 +21,10 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 from PySide6.QtCore import QPointF, QRectF, QSize, Qt
-from PySide6.QtGui import QColor, QPainter, QPen, QPolygonF
+from PySide6.QtGui import QBrush, QColor, QPainter, QPen, QPolygonF
 from PySide6.QtWidgets import QMenu, QSizePolicy, QWidget
 
-from app.commands import TrimCommand
+from app.commands import BringBackCommand, TrimCommand
 from app.state import AppState
 
 KEY_COLOUR = QColor(255, 140, 0)
@@ -31,6 +33,7 @@ LOST_COLOUR = QColor(220, 30, 30)
 CHECK_COLOUR = QColor(220, 30, 30, 110)
 SKETCH_COLOUR = QColor(230, 190, 0)
 CORRECTED_COLOUR = QColor(175, 110, 255)
+LEFT_OUT_COLOUR = QColor(90, 150, 255)
 CURSOR_COLOUR = QColor(200, 0, 0)
 TRIM_COLOUR = QColor(250, 250, 250)
 OUTSIDE_SHADE = QColor(0, 0, 0, 150)
@@ -105,6 +108,11 @@ class TimelineWidget(QWidget):
         return [(c.start + off, c.stop + off, c.period_frames, min(c.r1, c.r2))
                 for c in analysis.cycles]
 
+    def left_out(self) -> tuple[int, ...]:
+        """Source frames the analysis left out (the animal only partly in view)."""
+        analysis = self._state.analysis
+        return () if analysis is None else analysis.partial_frames
+
     def cycle_at(self, x: float) -> tuple[int, int, float, float] | None:
         frame = self.frame_at(x)
         return next((c for c in self.cycles() if c[0] <= frame < c[1]), None)
@@ -165,6 +173,17 @@ class TimelineWidget(QWidget):
         under it, or clear the marks."""
         cycle = self.cycle_at(x)
         menu = QMenu(self)
+        frame = self.frame_at(x)
+        run = _run_around(frame, self.left_out())
+        back = _run_around(frame, self._state.project.settings.bring_back)
+        if run:
+            menu.addAction(f"Analyse {_frames_text(run)} anyway (the animal is only partly in "
+                           "view)", lambda: self._state.undo_stack.push(
+                               BringBackCommand(self._state, run)))
+        elif back:
+            menu.addAction(f"Leave {_frames_text(back)} out again",
+                           lambda: self._state.undo_stack.push(
+                               BringBackCommand(self._state, back, back=False)))
         if cycle is not None:
             start, stop = cycle[0], cycle[1]
             menu.addAction(f"Trim to this stretch (frames {start}–{stop - 1})",
@@ -203,11 +222,18 @@ class TimelineWidget(QWidget):
         for f in range(0, n, step):
             x = self.x_of(f)
             p.drawLine(QPointF(x, track.bottom() - 4), QPointF(x, track.bottom()))
-        project, analysis = self._state.project, self._state.analysis
-        lost = analysis.lost_frames if analysis is not None else ()
-        if not lost and project.silhouettes is not None:
+        project = self._state.project
+        left_out = set(self.left_out())
+        lost = []
+        if project.silhouettes is not None:
             lost = [int(f) for f in project.silhouettes.roi.lost.nonzero()[0]]
         width = max(2.0, track.width() / n)
+        hatch = QBrush(LEFT_OUT_COLOUR, Qt.BrushStyle.BDiagPattern)
+        for f in left_out:
+            rect = QRectF(self.x_of(f) - width / 2, track.top(), width, track.height())
+            p.fillRect(rect, QColor(LEFT_OUT_COLOUR.red(), LEFT_OUT_COLOUR.green(),
+                                    LEFT_OUT_COLOUR.blue(), 90))
+            p.fillRect(rect, hatch)
         for f in self.frames_to_check():
             p.fillRect(QRectF(self.x_of(f) - width / 2, track.top(), width, track.height()),
                        CHECK_COLOUR)
@@ -289,3 +315,20 @@ def _triangle(p: QPainter, x: float, bottom: float, colour: QColor, *, filled: b
     p.setBrush(colour if filled else Qt.BrushStyle.NoBrush)
     p.drawPolygon(QPolygonF([QPointF(x - 5, bottom - 9), QPointF(x + 5, bottom - 9),
                              QPointF(x, bottom)]))
+
+
+def _run_around(frame: int, frames: Sequence[int]) -> tuple[int, ...]:
+    """The run of consecutive ``frames`` that holds ``frame`` (empty when it is not one)."""
+    have = set(frames)
+    if frame not in have:
+        return ()
+    lo, hi = frame, frame
+    while lo - 1 in have:
+        lo -= 1
+    while hi + 1 in have:
+        hi += 1
+    return tuple(range(lo, hi + 1))
+
+
+def _frames_text(frames: tuple[int, ...]) -> str:
+    return f"frame {frames[0]}" if len(frames) == 1 else f"frames {frames[0]}–{frames[-1]}"
