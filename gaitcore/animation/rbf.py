@@ -3,11 +3,14 @@
 A pose vector x(p) is predicted from PCA coordinates p as a weighted sum of the key poses,
 x(p) = h(p) A with h(p)_i = exp(-alpha * |p - p_i|^2) and A solving H A = X.
 
-Beyond the paper, the map interpolates the key poses' departures from their mean, x(p) =
-mean + w(p) (X - mean): where the weights sum to less than one (between keys that lie far
-apart, as a real clip's keys do) the pose falls back towards the keys' mean pose instead of
-shrinking towards zero (the rest pose, or the trunk's origin for positions). At the keys the
-interpolation stays exact; where the weights sum to one nothing changes.
+Beyond the paper, the pose is blended from the weights the way its Section 5.3 suggests a
+control might: negative weights are dropped and, where the others sum past one, they are
+scaled to sum to one, so that a frame whose coordinates a noisy silhouette threw off the
+keys' loop cannot swing the pose beyond what the keys span; and what the weights leave
+(where they sum to less than one, between keys that lie far apart, as a real clip's keys
+do) goes to the keys' mean pose, not to zero (the rest pose, or the trunk's origin for
+positions): x(p) = mean + b(p) (X - mean) with b the blend (:meth:`RBFPoseMap.blend`). At
+the keys the interpolation stays exact.
 """
 
 from __future__ import annotations
@@ -155,6 +158,24 @@ class RBFPoseMap:
             w = np.clip(w, *self.clamp)
         return w[0] if single else w
 
+    def blend(self, coords: np.ndarray) -> np.ndarray:
+        """What each key pose weighs in the predicted pose (see the module's notes).
+
+        Parameters
+        ----------
+        coords : array_like of shape (n, c) or (c,)
+
+        Returns
+        -------
+        ndarray of shape (n, m) (or (m,) for one point)
+            :meth:`weights` without its negative values and, where the rest sum past one,
+            scaled to sum to one: never negative, summing to at most one (exactly one at
+            the keys); the keys' mean pose takes the remainder.
+        """
+        w = np.clip(self.weights(coords), 0.0, None)
+        total = w.sum(axis=-1, keepdims=True)
+        return np.where(total > 1.0, w / np.maximum(total, 1e-300), w)
+
     def predict(self, coords: np.ndarray) -> np.ndarray:
         """Predicted pose vectors.
 
@@ -165,7 +186,7 @@ class RBFPoseMap:
         Returns
         -------
         ndarray of shape (n, k) (or (k,) for one point)
-            ``mean + w(p) (X - mean)`` (see the module's notes).
+            ``mean + b(p) (X - mean)``, b the :meth:`blend` (see the module's notes).
         """
         mean = self.mean_pose
-        return mean + self.weights(coords) @ (self.key_poses - mean)
+        return mean + self.blend(coords) @ (self.key_poses - mean)

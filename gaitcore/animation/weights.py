@@ -1,6 +1,7 @@
 """What the animation preview shows besides the curves: RBF weights over time, one loop cycle.
 
-:func:`interpolation_weights` gives w_i(t) of every posed frame (paper Figure 10), also under
+:func:`interpolation_weights` gives what each posed frame weighs in the pose of every frame
+(paper Figure 10's w_i(t), as the pose blends them: :meth:`RBFPoseMap.blend`), also under
 the switching models of Section 3.2; :func:`loop_cycle` cuts one gait cycle out of the curves
 and makes it close on itself, for a cycle that loops in an animation package.
 """
@@ -26,7 +27,8 @@ class InterpolationWeights:
     pose_frames : tuple of int
         The posed frames, one per column: key order, or gait-phase order under switching.
     weights : ndarray of shape (n, P)
-        w_i(t); under switching, zero for poses outside the active set of frame t.
+        What pose i weighs at frame t (:meth:`~gaitcore.animation.rbf.RBFPoseMap.blend`);
+        under switching, zero for poses outside the active set of frame t.
     states : ndarray of shape (n,), int, or None
         Active switching set per frame (None without switching).
     """
@@ -37,7 +39,8 @@ class InterpolationWeights:
 
     @property
     def total(self) -> np.ndarray:
-        """Sum of the weights per frame, shape (n,): about 1 near the data (exactly at keys)."""
+        """Sum of the weights per frame, shape (n,): 1 near the data (exactly at keys), less
+        where the pose falls back towards the keys' mean pose."""
         return self.weights.sum(axis=1)
 
 
@@ -82,7 +85,7 @@ def interpolation_weights(
     keys = tuple(int(f) for f in key_frames)
     if not alternate_frames:
         rbf = RBFPoseMap.fit(p[list(keys)], np.zeros((len(keys), 1)), alpha=alpha, clamp=clamp)
-        return InterpolationWeights(keys, rbf.weights(p))
+        return InterpolationWeights(keys, rbf.blend(p))
     if theta is None:
         raise GaitInputError("switching models need the loop angle of every frame")
     frames = keys + tuple(int(f) for f in alternate_frames)
@@ -94,7 +97,7 @@ def interpolation_weights(
     for s, rbf in enumerate(model.maps):
         rows = np.nonzero(states == s)[0]
         if rows.size:
-            w[np.ix_(rows, model.sets[s])] = rbf.weights(p[rows])
+            w[np.ix_(rows, model.sets[s])] = rbf.blend(p[rows])
     return InterpolationWeights(model.pose_frames, w, states)
 
 

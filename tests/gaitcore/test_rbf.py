@@ -25,8 +25,21 @@ def test_matches_paper_pseudo_inverse_formula():
     weights = hq @ np.linalg.inv(h.T @ h) @ h.T  # paper eq. (13)
     rbf = RBFPoseMap.fit(p, x)
     np.testing.assert_allclose(rbf.weights(q), weights, atol=1e-9)
-    mean = x.mean(axis=0)  # the departures from the keys' mean are interpolated
-    np.testing.assert_allclose(rbf.predict(q), mean + weights @ (x - mean), atol=1e-9)
+    blend = np.clip(weights, 0, None)  # no negative weight, and never more than one in all
+    blend /= np.maximum(blend.sum(axis=1, keepdims=True), 1.0)
+    np.testing.assert_allclose(rbf.blend(q), blend, atol=1e-9)
+    mean = x.mean(axis=0)  # what the weights leave goes to the keys' mean
+    np.testing.assert_allclose(rbf.predict(q), mean + blend @ (x - mean), atol=1e-9)
+
+
+def test_a_point_thrown_off_the_keys_cannot_swing_the_pose_beyond_them():
+    p = np.array([[0.0, 0.0], [0.2, 0.0], [0.0, 2.0], [2.0, 2.0]])  # two keys close together
+    x = np.array([[0.0], [1.0], [0.5], [0.2]])
+    rbf = RBFPoseMap.fit(p, x)
+    q = np.array([[-0.6, -0.1], [0.8, 0.0], [0.1, -0.5]])
+    assert np.abs(rbf.weights(q)).max() > 2  # the paper's weights overshoot there...
+    pose = rbf.predict(q)
+    assert (pose >= x.min() - 1e-9).all() and (pose <= x.max() + 1e-9).all()  # ...the pose not
 
 
 def test_far_from_the_keys_the_pose_falls_back_to_their_mean():
