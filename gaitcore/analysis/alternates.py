@@ -74,7 +74,8 @@ def propose_alternates(
     -------
     tuple of int
         One alternate per key, in the order of ``key_frames``: never a key, never twice the
-        same frame.
+        same frame, never a frame whose coordinates are those of another key or alternate
+        (a synthetic clip repeats exactly: the interpolation could not tell them apart).
 
     Raises
     ------
@@ -99,7 +100,11 @@ def propose_alternates(
                 f"no frame of the other half-cycle lies {where}: the clip is too short or "
                 "too irregular to look for alternates; use a longer stretch of steady gait"
             )
-        ok[list(key_frames) + out] = False  # a frame poses one thing only
+        posed = list(key_frames) + out  # a frame poses one thing only
+        ok[posed] = False
+        others = [f for f in posed if f != k]  # nor the very silhouette of another posed frame
+        if others:
+            ok &= ((p[:, None, :] - p[others][None]) ** 2).sum(axis=2).min(axis=1) > 1e-12
         ok[[f for f in forbidden if 0 <= f < n]] = False
         if not ok.any():
             raise GaitInputError(
