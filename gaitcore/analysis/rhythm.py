@@ -50,10 +50,6 @@ MIN_DIP = 0.15
 """... and at least this deep (in units of the curve: about 1 for unrelated frames): the
 wobble of a curve over frames that never come back stays under it."""
 
-NEXT_FRAME = 0.5
-"""A clip whose neighbouring frames differ by more than this (in the curve's units) changes
-as noise does, not as a moving animal: no cycle is timed in it."""
-
 DRIFT_SHARE = 0.25
 """A trajectory keeps its slow trend unless that trend holds at least this share of its
 variance: fitted over a whole number of cycles plus a part, a steady rhythm alone leaves a
@@ -191,12 +187,11 @@ def cycle_lag(curve: np.ndarray, *, first_lag: int = 1) -> float | None:
     highest points of the curve before it and after it (up to 1.5 L, the next harmonic's
     territory). The first dip at least :data:`DIP_SHARE` as deep as the deepest one (and
     :data:`MIN_DIP` deep) is the cycle, refined by a parabola through its neighbours. None
-    when the curve has no such dip at ``first_lag`` or beyond, or when neighbouring frames
-    already differ by more than :data:`NEXT_FRAME`.
+    when the curve has no such dip at ``first_lag`` or beyond.
     """
     d = np.asarray(curve, dtype=float)
     m = d.size
-    if m < 3 or d[0] > NEXT_FRAME:
+    if m < 3:
         return None
     dips = []
     for i in range(max(1, first_lag - 1), m - 1):
