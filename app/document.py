@@ -142,7 +142,10 @@ class DocumentController(QObject):
         """True when the project has no unsaved change, or the artist saved or discarded it."""
         if self._state.undo_stack.isClean():
             return True
-        name = self._state.path.name if self._state.path else "the untitled project"
+        footage = self._state.project.footage
+        name = (self._state.path.name if self._state.path
+                else f"the new project on {footage.name}" if footage is not None
+                else "the untitled project")
         answer = self.asker.save_changes(name)
         return answer == "discard" or (answer == "save" and self.save())
 

@@ -163,7 +163,7 @@ class RotoController(QObject):
             session = RotoSession.start(source, project, progress)
             return session, session.silhouettes()
 
-        job = Job(work, "Segmenting the clip")
+        job = Job(work, "Segmenting the clip", unit=None)  # passes over frames: per cent
         return self._start(job, project, lambda sil: state.undo_stack.push(
             SetSilhouettesCommand(state, sil, "segment clip")))
 
@@ -235,7 +235,7 @@ class RotoController(QObject):
             done = change(resumed(session, source, project, saved=saved), progress)
             return done, done.silhouettes()
 
-        return self._start(Job(work, title), project, push)
+        return self._start(Job(work, title, unit=None), project, push)
 
     def _start(self, job: Job, project, push) -> Job:
         """Run a segmentation job; its result lands only on the project it was made for."""

@@ -74,6 +74,7 @@ class ScriptedAsker(Asker):
         self.errors.append(f"{title}: {message}")
 
     def save_changes(self, name: str) -> str:
+        self.asked.append(f"save changes to {name}")
         return self.save_answer
 
     def open_path(self, start):

@@ -195,6 +195,15 @@ def test_save_reopen_gives_the_same_project(qtbot, make_window, asker, canter_cl
     assert view.loop.isChecked() and view.clamp.isChecked() and not view.filtered.isChecked()
     assert second.animator.options.loop
     assert str(tmp_path / "horse.gaitproj") in second.documents.recent_files()[0]
+    # The unsaved-changes question names the project, or the footage of a new one.
+    second.pc_plot.pcs.setValue(2)
+    assert second.documents.may_close() and asker.asked[-1] == "save changes to horse.gaitproj"
+    third = make_window()
+    third.open_path(canter_clip / "masks")
+    wait_ready(qtbot, third)
+    third.pc_plot.pcs.setValue(3)
+    assert third.documents.may_close()
+    assert asker.asked[-1] == "save changes to the new project on masks"
 
 
 def test_corrupt_and_newer_projects_give_a_message_and_stay_untouched(qtbot, window, asker,
@@ -342,6 +351,7 @@ def test_one_box_around_the_animal_is_enough_to_segment(qtbot, window, canter_cl
     assert box is not None and not window.state.project.subject_rects
     assert abs(box.x - 6) <= 2 and abs(box.w - 306) <= 3
     job = window.tools.segment()
+    assert job.unit is None  # its progress counts passes over the frames: shown in per cent
     with qtbot.waitSignal(job.succeeded, timeout=60_000):
         pass
     wait_ready(qtbot, window)
