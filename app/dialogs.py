@@ -22,11 +22,15 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from gaitcore.footage.sources import DEFAULT_FPS
 from gaitcore.project.document import AnimationOptions
 from gaitcore.project.storage import SUFFIX
+from gaitcore.schema import MAX_FPS
 
 FOOTAGE_FILTER = "Footage (*.mp4 *.mov *.avi *.mkv *.m4v *.webm *.gif);;All files (*)"
 PROJECT_FILTER = f"Gait Studio projects (*{SUFFIX})"
+COMMON_RATES = ("15", "24", "25", "30", "50", "60")
+"""Frame rates offered for a clip whose files do not say theirs (an image folder)."""
 
 
 class Asker:
@@ -136,10 +140,19 @@ class Asker:
         return int(item) if ok else None
 
     def frame_rate(self, current: float | None) -> float | None:
-        """A frame rate in frames per second (None: cancelled)."""
-        value, ok = QInputDialog.getDouble(self._parent, "Frame rate", "Frames per second:",
-                                           current or 25.0, 1.0, 1000.0, 3)
-        return value if ok else None
+        """A frame rate in frames per second (None: cancelled): the usual rates offered, any
+        other typed; ``current`` (the rate playback uses) first."""
+        shown = f"{current or DEFAULT_FPS:g}"
+        items = [shown] + [r for r in COMMON_RATES if r != shown]
+        text, ok = QInputDialog.getItem(self._parent, "Frame rate",
+                                        "Frames per second of the clip:", items, 0, True)
+        if not ok:
+            return None
+        try:
+            value = float(text)
+        except ValueError:
+            return None
+        return value if 0 < value <= MAX_FPS else None
 
 
 class HeadlessAsker(Asker):

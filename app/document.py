@@ -17,8 +17,9 @@ from app.dialogs import Asker
 from app.state import AppState
 from app.workers import Job, JobRunner, ProgressDialog
 from gaitcore.errors import GaitInputError
+from gaitcore.footage.sources import DEFAULT_FPS
 from gaitcore.project.document import Project, Silhouettes
-from gaitcore.project.steps import open_source, silhouettes_from_masks
+from gaitcore.project.steps import frame_rate, open_source, silhouettes_from_masks
 from gaitcore.project.storage import SUFFIX, load_project, missing_footage, save_project
 from gaitcore.silhouettes.extract import is_mask_folder
 
@@ -68,6 +69,13 @@ class DocumentController(QObject):
         except GaitInputError as exc:
             self.asker.error("Cannot open footage", str(exc))
             return False
+        if source is not None and source.fps is None:  # an image folder says no rate
+            fps = self.asker.frame_rate(frame_rate(project, source))
+            if fps is not None:
+                project = replace(project, fps=fps)
+            else:
+                self.messageRaised.emit(f"frame rate unknown: {DEFAULT_FPS:g} fps assumed "
+                                        "(Playback > Set frame rate)")
         self._state.open(project, None, source)
         self._add_recent(path)
         if source is not None and source.note:

@@ -45,6 +45,7 @@ from app.widgets.timeline import TimelineWidget
 from app.workers import FrameLoader, JobRunner
 from gaitcore.errors import GaitInputError
 from gaitcore.project.batch import read_summary
+from gaitcore.project.steps import frame_rate
 from gaitcore.rig.orient import AXES
 
 APP_NAME = "Gait Studio"
@@ -389,7 +390,7 @@ class MainWindow(QMainWindow):
                            "(faint red on the timeline)")
 
     def _ask_frame_rate(self) -> None:
-        fps = self.asker.frame_rate(self.state.fps)
+        fps = self.asker.frame_rate(frame_rate(self.state.project, self.state.source))
         if fps is not None:
             self.state.undo_stack.push(FrameRateCommand(self.state, fps))
 

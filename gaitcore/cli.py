@@ -146,6 +146,9 @@ def _run_analyze(args: argparse.Namespace) -> int:
         start, stop = analysis.frame_range
         print(f"frames: {analysis.n_frames}, {start} to {stop - 1} "
               f"(subject lost or left out in {len(analysis.lost_frames)} of them)")
+        if fps is None:
+            print("frame rate: unknown (an image folder says none): give --fps for periods in "
+                  "seconds and for animate's timing, which otherwise assumes 24")
         if states:
             segment_command.print_frames_to_check([states[t] for t in sorted(states)],
                                                   first_frame=args.start)

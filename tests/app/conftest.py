@@ -114,7 +114,7 @@ class ScriptedAsker(Asker):
         return self.confirm_answer
 
     def frame_rate(self, current: float | None) -> float | None:
-        self.asked.append("frame rate")
+        self.asked.append(f"frame rate ({current:g} offered)")
         return self.frame_rate_answer
 
     def choose_frame(self, title: str, frames: list[int], *,

@@ -75,9 +75,11 @@ def test_frame_rate_of_an_image_folder_is_set_undone_and_drives_playback(qtbot, 
     qtbot.waitUntil(lambda: window.state.analysis is not None, timeout=60_000)
     wait_ready(qtbot, window, 60_000)
     state = window.state
-    assert state.fps is None
+    assert state.fps is None and asker.asked == ["frame rate (24 offered)"]  # asked on opening
+    assert "24 fps assumed" in window.statusBar().currentMessage()  # the artist said nothing
     asker.frame_rate_answer = 30.0
     action(window, "Set frame rate...").trigger()
+    assert asker.asked[-1] == "frame rate (24 offered)"  # what playback uses, not another
     assert state.fps == 30.0 and state.project.fps == 30.0
     window.player.toggle()
     assert window.player._timer.interval() == 33
@@ -140,3 +142,16 @@ def test_a_trimmed_animation_exports_source_frames_at_the_clip_rate(qtbot, windo
     np.testing.assert_array_equal(table.frames, np.arange(20, 80))
     second = (tmp_path / "curves.csv").read_text().splitlines()[1].split(",")
     assert second[0] == "20" and float(second[1]) == pytest.approx(20 / state.fps)
+
+
+def test_an_image_folder_asks_its_frame_rate_on_opening_and_keeps_it(qtbot, window, asker,
+                                                                      tmp_path):
+    asker.frame_rate_answer = 15.0
+    assert window.open_path(stand_walk_stand(tmp_path / "masks"))
+    wait_ready(qtbot, window, 60_000)
+    state = window.state
+    assert state.fps == 15.0 and state.project.fps == 15.0
+    assert state.undo_stack.count() == 0  # the clip opened at its rate: not an edit to undo
+    window.player.toggle()
+    assert window.player._timer.interval() == 67
+    window.player.stop()

@@ -178,3 +178,14 @@ def test_colour_footage_without_rectangles(tmp_path, capsys):
 def test_bad_option_is_one_line(capsys):
     assert main(["analyze"]) == 2
     assert "required" in _error_line(capsys)
+
+
+def test_a_folder_without_fps_says_the_rate_is_unknown_and_fps_times_the_files(masks, tmp_path,
+                                                                                capsys):
+    assert main(["analyze", str(masks), "--out", str(tmp_path / "a")]) == 0
+    assert "frame rate: unknown" in capsys.readouterr().out
+    assert json.loads((tmp_path / "a" / "analysis.json").read_text())["fps"] is None
+    assert main(["analyze", str(masks), "--out", str(tmp_path / "b"), "--fps", "15"]) == 0
+    assert "frame rate: unknown" not in capsys.readouterr().out
+    data = json.loads((tmp_path / "b" / "analysis.json").read_text())
+    assert data["fps"] == 15.0 and data["period_s"] == pytest.approx(data["period_frames"] / 15)
