@@ -19,7 +19,7 @@ from gaitcore.bench import synth_command
 from gaitcore.errors import GaitInputError
 from gaitcore.io import segment_command
 from gaitcore.progress import Cancelled
-from gaitcore.project import batch_command
+from gaitcore.project import batch_command, pose_command
 from gaitcore.schema import MAX_FPS
 
 
@@ -188,7 +188,8 @@ def _add_animate(sub) -> None:
     )
     p.add_argument("analysis", type=Path, help="analysis.json written by 'gaitcore analyze'")
     p.add_argument("--key-poses", type=Path, required=True, metavar="KEYS.csv",
-                   help="CSV with a 'frame' column and one column per channel")
+                   help="CSV with a 'frame' column and one column per channel, one row per key "
+                   "(and alternate) frame; 'gaitcore pose' writes one to start from")
     p.add_argument("--out", type=Path, required=True, metavar="CURVES.csv")
     p.add_argument("--filtered", action="store_true",
                    help="drive the animation with the band-pass filtered trajectories")
@@ -368,6 +369,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     _add_analyze(sub)
     _add_animate(sub)
+    pose_command.add_parser(sub)
     synth_command.add_parser(sub)
     segment_command.add_parser(sub)
     _add_evaluate(sub)

@@ -189,3 +189,24 @@ def test_a_folder_without_fps_says_the_rate_is_unknown_and_fps_times_the_files(m
     assert "frame rate: unknown" not in capsys.readouterr().out
     data = json.loads((tmp_path / "b" / "analysis.json").read_text())
     assert data["fps"] == 15.0 and data["period_s"] == pytest.approx(data["period_frames"] / 15)
+
+
+def test_pose_writes_a_key_pose_csv_that_animate_takes(analysis_dir, tmp_path, capsys):
+    from gaitcore.io.pose_table import read_pose_table
+    from gaitcore.rig.templates import load_template
+
+    keys = tmp_path / "keys.csv"
+    assert main(["pose", str(analysis_dir / "analysis.json"), "--out", str(keys)]) == 0
+    table = read_pose_table(keys)
+    data = json.loads((analysis_dir / "analysis.json").read_text())
+    horse = load_template("horse")
+    assert list(table.frames) == data["key_frames"]
+    assert table.columns == tuple(horse.channel_names)
+    assert np.allclose(table.values, horse.rest_pose())
+    assert "gaitcore animate" in capsys.readouterr().out
+    out = tmp_path / "curves.csv"
+    assert main(["animate", str(analysis_dir / "analysis.json"), "--key-poses", str(keys),
+                 "--out", str(out)]) == 0
+    assert len(read_pose_table(out).frames) == data["n_frames"]
+    assert main(["pose", str(tmp_path / "missing.json"), "--out", str(keys)]) == 2
+    assert "missing.json" in _error_line(capsys)
