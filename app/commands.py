@@ -15,6 +15,7 @@ from PySide6.QtGui import QUndoCommand
 from app.state import AppState
 from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.project.document import AnimationOptions, FootageFit, Project, Silhouettes
+from gaitcore.project.footage_fit import facing_travel
 from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
 
 
@@ -258,10 +259,15 @@ class AcceptAlternatesCommand(ProjectCommand):
 
 
 class SetSilhouettesCommand(ProjectCommand):
-    """Replace the silhouettes, e.g. with the result of segmenting the clip."""
+    """Replace the silhouettes, e.g. with the result of segmenting the clip; the first ones
+    also turn the footage behind the rig to the way the animal walks (one undo step)."""
 
     def __init__(self, state: AppState, silhouettes: Silhouettes | None, text: str) -> None:
-        super().__init__(state, replace(state.project, silhouettes=silhouettes), text)
+        project = state.project
+        fit = project.footage_fit
+        if project.silhouettes is None and silhouettes is not None:
+            fit = facing_travel(fit, silhouettes)
+        super().__init__(state, replace(project, silhouettes=silhouettes, footage_fit=fit), text)
 
 
 class AnimationOptionsCommand(ProjectCommand):

@@ -19,6 +19,7 @@ from app.workers import Job, JobRunner, ProgressDialog
 from gaitcore.errors import GaitInputError
 from gaitcore.footage.sources import DEFAULT_FPS
 from gaitcore.project.document import Project, Silhouettes
+from gaitcore.project.footage_fit import facing_travel
 from gaitcore.project.steps import frame_rate, open_source, silhouettes_from_masks
 from gaitcore.project.storage import SUFFIX, load_project, missing_footage, save_project
 from gaitcore.silhouettes.extract import is_mask_folder
@@ -186,7 +187,9 @@ class DocumentController(QObject):
     def _set_initial_silhouettes(self, opened: Project, silhouettes: Silhouettes) -> None:
         """Give the freshly opened mask folder its silhouettes, unless another was opened."""
         if self._state.project is opened:
-            self._state.set_project(replace(opened, silhouettes=silhouettes))
+            self._state.set_project(replace(
+                opened, silhouettes=silhouettes,
+                footage_fit=facing_travel(opened.footage_fit, silhouettes)))
 
     def recent_files(self) -> list[str]:
         value = QSettings().value("recentFiles", [])

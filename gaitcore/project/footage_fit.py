@@ -37,6 +37,40 @@ FALLBACK_HEIGHT_SHARE = 0.6
 """Without silhouettes, the skeleton is assumed to fill this share of the frame height."""
 
 
+TRAVEL_SHARE = 0.5
+"""The animal travels across the view when its track moves by at least this share of its
+median silhouette width over the clip (less: it stays, or the camera follows it)."""
+
+
+def travel_direction(silhouettes: Silhouettes) -> int:
+    """Which way the animal crosses the view: +1 to the right, -1 to the left, 0 when it
+    does not cross it (it stays in place, or the camera pans with it).
+
+    The least-squares slope of the silhouettes' track over the frames where one was found,
+    times the clip's length, against :data:`TRAVEL_SHARE` of their median width.
+    """
+    roi = silhouettes.roi
+    found = np.flatnonzero(~roi.lost)
+    if found.size < 2:
+        return 0
+    cols = roi.crops[found].any(axis=1)
+    widths = [np.ptp(np.nonzero(c)[0]) + 1 for c in cols if c.any()]
+    if not widths:
+        return 0
+    slope = np.polyfit(found.astype(float), roi.centers_xy[found, 0], 1)[0]
+    travel = slope * (found[-1] - found[0])
+    width = float(np.median(widths)) / roi.scale
+    return 0 if abs(travel) < TRAVEL_SHARE * width else int(np.sign(travel))
+
+
+def facing_travel(fit: FootageFit, silhouettes: Silhouettes) -> FootageFit:
+    """``fit`` mirrored when the animal walks to the left: the rig faces +X, the way it walks
+    once the footage behind it is mirrored. A fit the artist changed is kept as it is."""
+    if fit != FootageFit() or travel_direction(silhouettes) >= 0:
+        return fit
+    return FootageFit(flip=True)
+
+
 @dataclass(frozen=True)
 class SkeletonExtent:
     """Side-view size of a skeleton at rest, metres (gaitcore frame)."""

@@ -38,6 +38,7 @@ def test_a_horse_walk_from_one_box_is_usable_and_shows_what_was_left_out(
     wait_ready(qtbot, window, 60_000)
     analysis = window.state.analysis
     assert analysis.diagnosis.verdict.value == "usable", analysis.diagnosis.reason
+    assert window.state.project.footage_fit.flip  # the horse walks left: the rig faces it
     # The horse enters and leaves the view: those frames are left out, and marked.
     left_out = window.timeline.left_out()
     assert left_out and left_out[0] < 5 and left_out[-1] > 50

@@ -6,10 +6,15 @@ import numpy as np
 import pytest
 
 from gaitcore.project.document import FootageFit, Silhouettes
-from gaitcore.project.footage_fit import reference_image, skeleton_extent
+from gaitcore.project.footage_fit import (
+    facing_travel,
+    reference_image,
+    skeleton_extent,
+    travel_direction,
+)
 from gaitcore.rig.templates import load_template
 from gaitcore.silhouettes.tracking import crop_rois
-from tests.gaitcore.walker import walker_clip
+from tests.gaitcore.walker import walker_clip, walker_frame
 
 
 @pytest.fixture(scope="module")
@@ -48,3 +53,20 @@ def test_a_bad_fit_is_refused():
         FootageFit(scale=0.0)
     with pytest.raises(GaitInputError, match="finite"):
         FootageFit(offset_y_m=float("nan"))
+
+
+def test_the_footage_turns_to_the_way_the_animal_walks():
+    def crossing(step_px: int) -> Silhouettes:
+        frames = []
+        for t in range(40):
+            canvas = np.zeros((120, 400), np.uint8)
+            x = 100 + step_px * t
+            canvas[:, x : x + 200] = walker_frame(float(t), size=(120, 200))
+            frames.append(canvas)
+        return Silhouettes(crop_rois(np.stack(frames)), "masks")
+
+    left, right, still = crossing(-2), crossing(2), crossing(0)
+    assert (travel_direction(left), travel_direction(right), travel_direction(still)) == (-1, 1, 0)
+    assert facing_travel(FootageFit(), left).flip and not facing_travel(FootageFit(), right).flip
+    mine = FootageFit(scale=1.2)  # the artist's own fit is kept as it is
+    assert facing_travel(mine, left) == mine
