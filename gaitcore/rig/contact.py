@@ -2,12 +2,15 @@
 
 Interpolated legs float, sink and skate: a blend of key poses does not know where the ground
 is. After interpolation, each foot (an end joint at the lowest height of the rest skeleton)
-is followed along the ground as the animal travels. Where it is low and slow it is in stance:
-it is planted at one point of the ground for the whole stance, blended in over a few frames
-before touch-down and out after lift-off, and everywhere else it is only lifted out of the
-ground. :func:`gaitcore.rig.ik.solve_chain` moves the leg onto each target within its joint
-limits, changing its angles as little as it can, the foot keeping its orientation; nothing
-but the legs' rotations changes.
+is followed along the ground as the animal travels. Where it is low (near the ground, or
+near its own lowest over the clip: a foot that floats above the ground all along is in stance
+in its lowest phase) and slow it is in stance: it is brought down and planted at one point of
+the ground for the whole stance, blended in over a few frames before touch-down and out after
+lift-off, and everywhere else it is only lifted out of the ground.
+:func:`gaitcore.rig.ik.solve_chain` moves the leg onto each target within its joint limits,
+changing its angles as little as it can, the foot keeping its orientation; nothing but the
+legs' rotations changes (a leg under a body that rides too high cannot reach: the report's
+``worst_miss_m`` says by how much).
 
 The motion is judged in the frame of the travelling animal: ``travel`` adds the distance
 covered to every pose, so an in-place cycle is cleaned as the forward motion it stands for.
@@ -30,6 +33,10 @@ FOOT_BAND = 0.05
 """End joints whose rest height is within this fraction of the skeleton's height from the
 lowest point are feet."""
 
+OWN_LOWEST = 5.0
+"""A foot's own lowest height over the clip is this percentile of its heights (a spike of a
+frame or two does not set it)."""
+
 
 @dataclass(frozen=True)
 class ContactSettings:
@@ -40,7 +47,8 @@ class ContactSettings:
     ground_y_m : float or None
         Height of the ground; None: the height of the feet in the rest pose.
     height_m : float
-        A foot at most this high above the ground is low.
+        A foot at most this high above the ground, or above its own lowest
+        (:data:`OWN_LOWEST`), is low.
     speed_ratio : float
         A foot moving at most this multiple of the animal's speed over the ground (or
         ``min_speed_m`` per frame, whichever is larger), measured over ``speed_window``
@@ -127,8 +135,13 @@ class ContactResult:
         if not self.feet:
             return "ground contact: no feet found"
         worst = max(self.feet, key=lambda f: f.max_shift_m)
-        return (f"ground contact: {len(self.feet)} feet planted, moved up to "
-                f"{100 * worst.max_shift_m:.1f} cm ({worst.name})")
+        planted = [f for f in self.feet if f.stance_frames]
+        never = [f.name for f in self.feet if not f.stance_frames]
+        head = (f"{len(planted)} feet planted" if not never else
+                f"{len(planted)} of {len(self.feet)} feet planted ({', '.join(never)} never "
+                "in stance)")
+        return (f"ground contact: {head}, moved up to {100 * worst.max_shift_m:.1f} cm "
+                f"({worst.name})")
 
 
 def find_feet(skeleton: Skeleton) -> tuple[str, ...]:
@@ -228,7 +241,8 @@ def _solve_frames(skeleton: Skeleton, poses: np.ndarray, feet: tuple[str, ...],
 
 def stance_mask(foot_xyz: np.ndarray, ground_y_m: float, *, animal_speed_m: float,
                 settings: ContactSettings = ContactSettings()) -> np.ndarray:
-    """Frames where a foot is low and slow, runs shorter than the minimum dropped.
+    """Frames where a foot is low (near the ground or near its own lowest) and slow, runs
+    shorter than the minimum dropped.
 
     Parameters
     ----------
@@ -244,14 +258,15 @@ def stance_mask(foot_xyz: np.ndarray, ground_y_m: float, *, animal_speed_m: floa
     ndarray of bool, shape (n,)
     """
     x = np.asarray(foot_xyz, float)
+    lowest = float(np.percentile(x[:, 1], OWN_LOWEST)) if len(x) else ground_y_m
+    low = (x[:, 1] - ground_y_m <= settings.height_m) | (x[:, 1] - lowest <= settings.height_m)
     if len(x) < 2:
-        return x[:, 1] - ground_y_m <= settings.height_m
+        return low
     w = max(1, settings.speed_window)
     ahead = np.minimum(np.arange(len(x)) + w, len(x) - 1)
     behind = np.maximum(np.arange(len(x)) - w, 0)
     speed = np.linalg.norm(x[ahead][:, [0, 2]] - x[behind][:, [0, 2]], axis=1) / (ahead - behind)
     slow = speed <= max(settings.speed_ratio * animal_speed_m, settings.min_speed_m)
-    low = x[:, 1] - ground_y_m <= settings.height_m
     mask = slow & low
     # At the clip's ends, where speed is one-sided, low is enough.
     for start, stop in true_runs(~mask):

@@ -130,3 +130,37 @@ def test_settings_are_checked_and_cancel_works(horse):
     truth, travel = _in_place(horse, "walk")
     with pytest.raises(Cancelled):
         clean_ground_contact(horse, truth, travel_m=travel, progress=lambda done, total: done < 3)
+
+
+def test_a_foot_that_floats_is_brought_down_in_stance(horse):
+    poses, travel = _in_place(horse, "walk")
+    floating = poses.copy()
+    floating[:, horse.channel_index("root.ty")] += 0.06  # above the 4 cm a foot counts low
+    feet = find_feet(horse)
+    index = [horse.joint_index(f) for f in feet]
+    ground = horse.joint_positions(horse.rest_pose())[index, 1].min()
+    lifted = horse.joint_positions(floating)[:, index, 1] - ground
+    assert lifted.min() > 0.05  # every hoof above the ground all along
+    result = clean_ground_contact(horse, floating, travel_m=travel)
+    pos = horse.joint_positions(result.poses) + travel[:, None, :]
+    for i, foot in enumerate(feet):
+        stance = result.stance[:, i]
+        assert stance.sum() >= 20, foot  # the old rule (4 cm of the ground) found none
+        heights = pos[stance, horse.joint_index(foot), 1] - ground
+        assert np.median(np.abs(heights)) < 0.001 and heights.min() > -0.005, foot
+        # a leg whose body rides high cannot reach down at touch-down: said, not hidden
+        assert (np.abs(heights) < 0.01).mean() > 0.75, (foot, np.round(heights, 3))
+        assert result.feet[i].worst_miss_m >= np.abs(heights).max() - 1e-6
+    assert result.summary().startswith("ground contact: 4 feet planted")
+
+
+def test_the_summary_says_which_feet_never_touch_down(horse):
+    poses, travel = _in_place(horse, "walk")
+    lifted = poses.copy()
+    for name in ("L_shoulder", "R_shoulder"):  # both forelegs swung up all the time
+        lifted[:, horse.channel_index(f"{name}.rz")] = 80.0
+    result = clean_ground_contact(horse, lifted, travel_m=travel,
+                                  settings=ContactSettings(speed_ratio=0.0, min_speed_m=0.0))
+    never = [r.name for r in result.feet if r.stance_frames == 0]
+    assert never and all(name in result.summary() for name in never)
+    assert f"of {len(result.feet)} feet planted" in result.summary()
