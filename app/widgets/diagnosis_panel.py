@@ -1,6 +1,7 @@
 """Is the clip usable? The spectral diagnosis of paper Section 5.2, as in its Figure 9.
 
-The amplitude spectra of the rhythm's pair and the next component (PC1..PC3 in the paper;
+The verdict first, in a word with the period and the components it is read on; then the
+amplitude spectra of the rhythm's pair and the next component (PC1..PC3 in the paper;
 on real footage often other ones, named in the legend), the peak function fitted to the
 first of them (scaled to its maximum), the band kept by the filter (shaded), then the
 correlation r of every component with its band-passed version, the period of the gait, the
@@ -49,12 +50,16 @@ class DiagnosisPanel(QWidget):
                                     name="peak fit")
         self.plot.addItem(self._band)
         self.plot.addItem(self._f0)
+        self.verdict = QLabel()  # above the spectrum: read without scrolling
+        self.verdict.setWordWrap(True)
+        self.verdict.setTextFormat(Qt.TextFormat.RichText)
         self.text = QLabel()
         self.text.setWordWrap(True)
         self.text.setTextFormat(Qt.TextFormat.RichText)
         self.text.setAlignment(Qt.AlignmentFlag.AlignTop | Qt.AlignmentFlag.AlignLeft)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(4, 4, 4, 4)
+        layout.addWidget(self.verdict)
         layout.addWidget(self.plot, 3)
         layout.addWidget(self.text, 2)
         state.analysisChanged.connect(self._on_analysis)
@@ -67,6 +72,7 @@ class DiagnosisPanel(QWidget):
         if analysis is None:
             for curve in self._curves + [self._peak]:
                 curve.setData([], [])
+            self.verdict.setText("")
             self.text.setText("<i>The diagnosis appears once the clip has silhouettes.</i>")
             return
         d = analysis.diagnosis
@@ -86,11 +92,20 @@ class DiagnosisPanel(QWidget):
         high = min(0.5, max(4 * d.band[1], 6 * d.f0))
         self.plot.setXRange(0, high, padding=0)
         self.plot.setYRange(0, amp[f <= high, : len(self._curves)].max() * 1.08, padding=0)
+        self.verdict.setText(self._headline(analysis))
         self.text.setText(self._describe(analysis))
+
+    @staticmethod
+    def _headline(analysis: Analysis) -> str:
+        """The verdict in a word, with the period and the components it is read on."""
+        d = analysis.diagnosis
+        colour = VERDICT_COLOURS[d.verdict]
+        return (f"<b style='color:{colour}; font-size:14pt'>"
+                f"{html.escape(d.verdict.value.capitalize())}</b>&nbsp;&nbsp;period "
+                f"{d.period_frames:.1f} frames, {html.escape(analysis.pair_name)}")
 
     def _describe(self, analysis: Analysis) -> str:
         d = analysis.diagnosis
-        colour = VERDICT_COLOURS[d.verdict]
         cells = []
         names = analysis.component_names
         for k, r in enumerate(d.correlations):
@@ -116,8 +131,6 @@ class DiagnosisPanel(QWidget):
         for note in () if advice is None else advice.notes:
             steps += f"<p>{html.escape(note)}</p>"
         return (
-            f"<b style='color:{colour}; font-size:14pt'>"
-            f"{html.escape(d.verdict.value.capitalize())}</b>"
             f"<table cellspacing='6'><tr><td><b>r</b></td>{''.join(cells)}</tr>"
             f"<tr><td><b>var %</b></td>"
             f"{''.join(f'<td>{v:.1f}</td>' for v in variance)}</tr></table>"

@@ -30,3 +30,17 @@ def test_no_dock_cuts_its_text_off(qtbot, window, canter_clip, artifacts_dir):
     diagnosis = window.docks["diagnosis"].widget()
     assert isinstance(diagnosis, QScrollArea)
     window.snapshot().save(str(artifacts_dir / "app_docks_small_window.png"))
+
+
+def test_the_verdict_is_read_above_the_spectrum_without_scrolling(qtbot, window, canter_clip):
+    open_demo(qtbot, window, canter_clip)
+    window.resize(1500, 950)
+    qtbot.wait(200)
+    area = window.docks["diagnosis"].widget()
+    panel = area.widget()
+    verdict = panel.verdict
+    assert "Usable" in verdict.text() and "PC1 × PC2" in verdict.text()
+    top = verdict.mapTo(area.viewport(), verdict.rect().topLeft()).y()
+    bottom = verdict.mapTo(area.viewport(), verdict.rect().bottomLeft()).y()
+    assert 0 <= top and bottom <= area.viewport().height()  # in view as the dock opens
+    assert verdict.geometry().bottom() <= panel.plot.geometry().top()
