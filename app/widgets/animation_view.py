@@ -37,7 +37,12 @@ class AnimationView(QWidget):
         self.plot.setLabel("left", "weight w_i(t)")
         self.plot.showGrid(x=True, y=True, alpha=0.2)
         self.plot.setMenuEnabled(False)
-        self.plot.addLegend(offset=(-5, 5), labelTextSize="8pt", colCount=5)
+        for side in ("bottom", "left"):  # no "frame (x0.001)" while the plot is empty
+            self.plot.getAxis(side).enableAutoSIPrefix(False)
+        # The legend in a row of its own under the frame axis, never over the curves.
+        self.legend = pg.LegendItem(labelTextSize="8pt", colCount=12)
+        self.plot.plotItem.layout.addItem(self.legend, 4, 1)
+        self.plot.setMinimumHeight(130)
         self.frame_line = pg.InfiniteLine(angle=90, pen=pg.mkPen("r", width=1))
         self.plot.addItem(self.frame_line)
         self._curves: list[pg.PlotDataItem] = []
@@ -93,6 +98,7 @@ class AnimationView(QWidget):
         for item in self._curves:
             self.plot.removeItem(item)
         self._curves = []
+        self.legend.clear()
         if animation is None:
             return
         w = animation.weights
@@ -108,12 +114,13 @@ class AnimationView(QWidget):
             style = Qt.PenStyle.DashLine if frame in alts else Qt.PenStyle.SolidLine
             pen = pg.mkPen(colour, width=2, style=style)
             label = f"{'alt' if frame in alts else 'key'} {frame}"
-            curve = self.plot.plot(t, w.weights[:, i], pen=pen, name=label)
+            curve = self.plot.plot(t, w.weights[:, i], pen=pen)
+            self.legend.addItem(curve, label)
             dot = self.plot.plot([frame], [w.weights[frame - first, i]], pen=None, symbol="o",
                                  symbolBrush=colour, symbolPen=None, symbolSize=7)
             self._curves += [curve, dot]
-        total = self.plot.plot(t, w.total, pen=pg.mkPen("k", width=1.5, style=Qt.PenStyle.DotLine),
-                               name="Σ w_i")
+        total = self.plot.plot(t, w.total, pen=pg.mkPen("k", width=1.5, style=Qt.PenStyle.DotLine))
+        self.legend.addItem(total, "Σ w_i")
         self._curves.append(total)
         if animation.cycle is not None:
             start = first + animation.cycle_start

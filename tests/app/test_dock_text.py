@@ -44,3 +44,20 @@ def test_the_verdict_is_read_above_the_spectrum_without_scrolling(qtbot, window,
     bottom = verdict.mapTo(area.viewport(), verdict.rect().bottomLeft()).y()
     assert 0 <= top and bottom <= area.viewport().height()  # in view as the dock opens
     assert verdict.geometry().bottom() <= panel.plot.geometry().top()
+
+
+def test_the_weights_legend_stands_under_the_curves(qtbot, window, canter_clip, artifacts_dir):
+    from tests.app.posing_helpers import pose_keys_truly
+
+    view = window.animation_view
+    assert "x0.001" not in view.plot.getAxis("bottom").labelString()  # empty: no SI prefix
+    open_demo(qtbot, window, canter_clip)
+    pose_keys_truly(window)
+    qtbot.waitUntil(lambda: window.animator.animation is not None, timeout=30_000)
+    window.resize(1500, 950)
+    qtbot.wait(200)
+    names = [label.text for _, label in view.legend.items]
+    assert len(names) == 5 and "Σ w_i" in names  # 4 keys and the sum
+    curves = view.plot.plotItem.vb.sceneBoundingRect()
+    assert view.legend.sceneBoundingRect().top() >= curves.bottom() - 1  # under, not over
+    view.grab().save(str(artifacts_dir / "app_weights_plot.png"))
