@@ -34,6 +34,7 @@ import numpy as np
 
 from gaitcore.analysis.spectrum import MIN_FRAMES, band_pass
 from gaitcore.errors import GaitInputError
+from gaitcore.silhouettes.tracking import moving_average
 
 MIN_CYCLES = 2.0
 """Fewest repeats of the rhythm a clip must hold for it to be found. The paper asks for 1.5
@@ -131,29 +132,10 @@ def slow_trend(x: np.ndarray, window: float) -> np.ndarray:
     a = np.asarray(x, dtype=float)
     flat = a.ndim == 1
     a = a.reshape(a.shape[0], -1)
-    n = a.shape[0]
     width = max(2, int(round(window)))
-    if n < 2 * width:
-        t = np.linspace(-1.0, 1.0, n)
-        basis = np.vander(t, min(3, n))
-        trend = basis @ np.linalg.lstsq(basis, a, rcond=None)[0]
-    else:
-        trend = np.column_stack([_moving_average(a[:, k], width) for k in range(a.shape[1])])
+    trend = np.column_stack([moving_average(a[:, k], width, fit_degree=2)
+                             for k in range(a.shape[1])])
     return trend[:, 0] if flat else trend
-
-
-def _moving_average(track: np.ndarray, width: int) -> np.ndarray:
-    """Moving average over ``width`` frames, continued linearly over the half-width at each
-    end (``n >= 2 * width``)."""
-    n = track.size
-    valid = np.convolve(track, np.ones(width) / width, mode="valid")
-    at = np.arange(valid.size) + (width - 1) / 2.0
-    t = np.arange(n, dtype=float)
-    out = np.interp(t, at, valid)
-    head, tail = t < at[0], t > at[-1]
-    out[head] = valid[0] + (t[head] - at[0]) * (valid[width] - valid[0]) / width
-    out[tail] = valid[-1] + (t[tail] - at[-1]) * (valid[-1] - valid[-1 - width]) / width
-    return out
 
 
 def repeat_curve(x: np.ndarray, max_lag: int) -> np.ndarray:

@@ -406,7 +406,7 @@ def stabilize_rois(roi: RoiClip, period_frames: float) -> RoiClip:
         return roi
     t = np.arange(n)
     raw = np.column_stack([np.interp(t, found, roi.centers_xy[found, k]) for k in range(2)])
-    smooth = np.column_stack([_period_average(raw[:, k], width) for k in range(2)])
+    smooth = np.column_stack([moving_average(raw[:, k], width) for k in range(2)])
     shift = np.round((raw - smooth) * roi.scale).astype(int)  # (dx, dy) in crop pixels
     shift[roi.lost] = 0
     pad_x, pad_y = np.abs(shift).max(axis=0)
@@ -420,21 +420,34 @@ def stabilize_rois(roi: RoiClip, period_frames: float) -> RoiClip:
                    edges=roi.edges)
 
 
-def _period_average(track: np.ndarray, width: int) -> np.ndarray:
-    """Moving average over ``width`` frames, continued linearly over the half-period at each
-    end (padding with the end value would leave the stride's wobble there)."""
+def moving_average(track: np.ndarray, width: int, *, fit_degree: int = 1) -> np.ndarray:
+    """Moving average over ``width`` frames, continued linearly over the half-width at each
+    end (padding with the end value would leave a stride's wobble there).
+
+    Parameters
+    ----------
+    track : ndarray of shape (n,)
+    width : int
+        Frames averaged, >= 2.
+    fit_degree : int
+        A clip shorter than two widths gets, instead, the least-squares polynomial of this
+        degree in time.
+
+    Returns
+    -------
+    ndarray of shape (n,)
+    """
     n = track.size
     if n < 2 * width:
-        return np.polyval(np.polyfit(np.arange(n), track, 1), np.arange(n))
+        t = np.linspace(-1.0, 1.0, n)
+        return np.polyval(np.polyfit(t, track, min(fit_degree, n - 1)), t)
     valid = np.convolve(track, np.ones(width) / width, mode="valid")
     at = np.arange(valid.size) + (width - 1) / 2.0
     t = np.arange(n, dtype=float)
     out = np.interp(t, at, valid)
     head, tail = t < at[0], t > at[-1]
-    slope_head = (valid[width] - valid[0]) / width
-    slope_tail = (valid[-1] - valid[-1 - width]) / width
-    out[head] = valid[0] + (t[head] - at[0]) * slope_head
-    out[tail] = valid[-1] + (t[tail] - at[-1]) * slope_tail
+    out[head] = valid[0] + (t[head] - at[0]) * (valid[width] - valid[0]) / width
+    out[tail] = valid[-1] + (t[tail] - at[-1]) * (valid[-1] - valid[-1 - width]) / width
     return out
 
 
