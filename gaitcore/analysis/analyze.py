@@ -280,14 +280,15 @@ def analyze_silhouettes(
     framed, framing = frame_silhouettes(roi, scale=settings.stabilize_roi, bring_back=back)
     lo, hi = _kept_stretch(framed.lost[start:stop])
     analysed = _slice(framed, start + lo, start + hi)
-    _check_found(replace(_slice(roi, start + lo, start + hi), lost=analysed.lost), settings)
+    given = _slice(roi, start + lo, start + hi)  # as tracked: the advice's cues, the checks
+    _check_found(replace(given, lost=analysed.lost), settings)
     cycles = find_cycles(framed, progress=_stage(progress, 0, 3))
     pca, *described = _describe(analysed, settings, sketched, _stage(progress, 1, 3))
     origin = first_frame + start + lo
     motion = _unkeyed(settings, pca, *described, first_frame=origin,
                       lost_frames=tuple(int(t) + origin for t in np.nonzero(analysed.lost)[0]),
                       cycles=cycles, cycle_offset=first_frame, framing=framing)
-    advice = advise(_slice(roi, start + lo, start + hi), motion.diagnosis, cycles,
+    advice = advise(given, motion.diagnosis, cycles,
                     first_frame=first_frame, sketched=sketched,
                     slow_lag=described[1].slow_lag_frames,
                     notes=framing_notes(framing, first_frame))

@@ -14,7 +14,7 @@ leave out.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -149,8 +149,7 @@ def frame_silhouettes(roi: RoiClip, *, scale: bool = True,
     n = lost.size
     ones = np.ones(n)
     if not scale or kept.size < 3:
-        framing = Framing(lost, edge, small, sides, ones, 1.0)
-        return _leave_out(roi, left_out), framing
+        return replace(roi, lost=left_out), Framing(lost, edge, small, sides, ones, 1.0)
     rows_spanned = _heights(roi.crops)
     t = np.arange(n)
     window = longest_period(kept.size)
@@ -164,15 +163,9 @@ def frame_silhouettes(roi: RoiClip, *, scale: bool = True,
     smooth = slow_trend(centre, window)
     shift = (smooth - centre) * roi.scale  # where the track's trend lies in each crop, px
     crops = _rescaled(roi.crops, factors, shift, left_out)
-    framing = Framing(lost, edge, small, sides, factors, change)
     centers = np.where(left_out[:, None], np.nan, smooth)
-    return RoiClip(crops=crops, centers_xy=centers, lost=left_out,
-                   scale=roi.scale, edges=roi.edges), framing
-
-
-def _leave_out(roi: RoiClip, left_out: np.ndarray) -> RoiClip:
-    return RoiClip(crops=roi.crops, centers_xy=roi.centers_xy, lost=left_out, scale=roi.scale,
-                   edges=roi.edges)
+    return (replace(roi, crops=crops, centers_xy=centers, lost=left_out),
+            Framing(lost, edge, small, sides, factors, change))
 
 
 def _heights(crops: np.ndarray) -> np.ndarray:
@@ -186,10 +179,13 @@ def _heights(crops: np.ndarray) -> np.ndarray:
 def _rescaled(crops: np.ndarray, factors: np.ndarray, shift: np.ndarray,
               left_out: np.ndarray) -> np.ndarray:
     """Each crop enlarged by its factor about the point ``shift`` from its centre (the
-    track's trend), that point put at the centre of a window large enough for them all."""
+    track's trend), that point put at the centre of a window large enough for them all
+    (grown by the largest shift, so that no silhouette is cut)."""
     n, rows, cols = crops.shape
     top = float(factors[~left_out].max())
-    out_rows, out_cols = int(np.ceil(rows * top)), int(np.ceil(cols * top))
+    reach_x, reach_y = np.abs(shift[~left_out]).max(axis=0)
+    out_rows = int(np.ceil((rows + 2 * reach_y) * top))
+    out_cols = int(np.ceil((cols + 2 * reach_x) * top))
     out = np.zeros((n, out_rows, out_cols), dtype=np.uint8)
     for t in np.flatnonzero(~left_out):
         f = float(factors[t])

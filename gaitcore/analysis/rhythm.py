@@ -258,10 +258,9 @@ def find_rhythm(projections: np.ndarray) -> Rhythm:
 
 def _dips_at(curve: np.ndarray, lag: float) -> bool:
     """Whether the repeat curve has a local minimum within a fifth of ``lag`` (frames)."""
-    d = np.asarray(curve, dtype=float)
-    lo, hi = max(1, int(np.floor(0.8 * lag))), min(d.size - 2, int(np.ceil(1.2 * lag)))
-    return any(d[i - 1] <= d[i - 1 - 1] and d[i - 1] <= d[i] for i in range(lo, hi + 1)
-               if i >= 2)
+    d = np.asarray(curve, dtype=float)  # entry j is lag j + 1
+    first, last = max(1, int(np.floor(0.8 * lag)) - 1), min(d.size - 2, int(np.ceil(1.2 * lag)) - 1)
+    return any(d[j] <= d[j - 1] and d[j] <= d[j + 1] for j in range(first, last + 1))
 
 
 def _band_energy(x: np.ndarray, freq: float) -> np.ndarray:
