@@ -13,7 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 import pyqtgraph as pg
-from PySide6.QtCore import Signal
+from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QColor
 from PySide6.QtWidgets import (
     QCheckBox,
@@ -184,6 +184,8 @@ class PCPlotWidget(QWidget):
         for f in keys + alts:
             label = pg.TextItem(str(f), color=(90, 50, 0) if f in keys else (0, 90, 120),
                                 anchor=(-0.3, 1.1))
+            for part in (label, *label.childItems()):  # clicks reach the points beneath
+                part.setAcceptedMouseButtons(Qt.MouseButton.NoButton)
             label.setPos(*self._coords[f - analysis.first_frame])
             self.plot.addItem(label)
             self._labels.append(label)
@@ -235,11 +237,18 @@ class PCPlotWidget(QWidget):
         return f"frame {data}\n{self._names[0]} {x:.2f}, {self._names[1]} {y:.2f}"
 
     # -- widgets -> commands ------------------------------------------------------------------
-    def _on_clicked(self, _item, points, _event=None) -> None:
-        """Go to the clicked frame; a clicked key-image becomes the selected key."""
+    def _on_clicked(self, _item, points, event=None) -> None:
+        """Go to the frame whose point lies nearest the click (a marker drawn over the points
+        does not hide the one under the pointer); a clicked key-image becomes the selected
+        key."""
         if not len(points):
             return
         frame = int(points[0].data())
+        if event is not None and len(self._coords):
+            at = event.pos()  # the items' coordinates are the plot's
+            row = int(np.argmin(np.hypot(self._coords[:, 0] - at.x(),
+                                         self._coords[:, 1] - at.y())))
+            frame = self._first + row
         self._state.set_frame(frame)
         keys = self._state.analysis.key_frames if self._state.analysis is not None else ()
         self._state.set_selected_key(frame if frame in keys else -1)
