@@ -15,15 +15,18 @@ from PySide6.QtWidgets import (
     QComboBox,
     QDialog,
     QDialogButtonBox,
+    QDoubleSpinBox,
     QFileDialog,
     QFormLayout,
     QInputDialog,
+    QLabel,
     QMessageBox,
     QWidget,
 )
 
 from gaitcore.footage.sources import DEFAULT_FPS
-from gaitcore.project.document import AnimationOptions
+from gaitcore.project.document import MAX_SPEED_M_S, AnimationOptions
+from gaitcore.project.steps import FootageSpeed
 from gaitcore.project.storage import SUFFIX
 from gaitcore.schema import MAX_FPS
 
@@ -116,9 +119,11 @@ class Asker:
         path = QFileDialog.getExistingDirectory(self._parent, title, str(suggested.parent))
         return Path(path) if path else None
 
-    def export_options(self, title: str, options: AnimationOptions) -> AnimationOptions | None:
-        """The export options, shown with ``options`` filled in (None: cancelled)."""
-        dialog = ExportOptionsDialog(options, self._parent)
+    def export_options(self, title: str, options: AnimationOptions,
+                       footage: FootageSpeed | None = None) -> AnimationOptions | None:
+        """The export options, shown with ``options`` filled in and the footage's speed
+        (None: it shows no travel) beside the speed (None: cancelled)."""
+        dialog = ExportOptionsDialog(options, footage, self._parent)
         dialog.setWindowTitle(title)
         return dialog.options() if dialog.exec() == QDialog.DialogCode.Accepted else None
 
@@ -199,7 +204,8 @@ class HeadlessAsker(Asker):
     def export_folder(self, title: str, suggested: Path) -> Path | None:
         return None
 
-    def export_options(self, title: str, options: AnimationOptions) -> AnimationOptions | None:
+    def export_options(self, title: str, options: AnimationOptions,
+                       footage: FootageSpeed | None = None) -> AnimationOptions | None:
         return options
 
     def confirm(self, title: str, message: str) -> bool:
@@ -213,9 +219,10 @@ class HeadlessAsker(Asker):
         return None
 
 ROOT_CHOICES = (
-    ("auto", "Automatic: in place for a loop, forward for the clip"),
+    ("auto", "Automatic: in place for a loop, else as in the footage"),
     ("in-place", "In place (horizontal root motion removed)"),
-    ("forward", "Forward at the clip's mean speed"),
+    ("footage", "As in the footage (the animal's own progress)"),
+    ("forward", "Forward at constant speed"),
     ("as-keys", "As interpolated from the keys (jumps back each cycle)"),
 )
 NAMING_CHOICES = (("as-is", "As in the skeleton (L_hip)"), ("rigify", "Blender / Rigify (hip.L)"))
@@ -224,13 +231,28 @@ NAMING_CHOICES = (("as-is", "As in the skeleton (L_hip)"), ("rigify", "Blender /
 class ExportOptionsDialog(QDialog):
     """Root motion, ground contact, loop and bone names of one export, before the file."""
 
-    def __init__(self, options: AnimationOptions, parent: QWidget | None = None) -> None:
+    def __init__(self, options: AnimationOptions, footage: FootageSpeed | None = None,
+                 parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self._options = options
         self.root = QComboBox()
         for value, label in ROOT_CHOICES:
             self.root.addItem(label, value)
         self.root.setCurrentIndex([v for v, _ in ROOT_CHOICES].index(options.root_motion))
+        self.speed = QDoubleSpinBox()
+        self.speed.setRange(0.0, MAX_SPEED_M_S)
+        self.speed.setDecimals(2)
+        self.speed.setSingleStep(0.1)
+        self.speed.setSuffix(" m/s")
+        self.speed.setSpecialValueText("from the footage" if footage else "from the keys")
+        self.speed.setValue(options.root_speed_m_s)
+        self.speed.setToolTip("Speed of a forward root; at its lowest, the footage's own "
+                              "(or the keys' roots' when the footage shows no travel)")
+        self.speed_source = QLabel(
+            f"The footage shows {footage.describe()}." if footage is not None else
+            "The footage shows no travel (the camera follows the animal, or it stays in "
+            "view): give the speed for a root that moves forward.")
+        self.speed_source.setWordWrap(True)
         self.contact = QCheckBox("Feet on the ground (plant stance, lift out of the floor)")
         self.contact.setChecked(options.ground_contact)
         self.loop = QCheckBox("One gait cycle that loops")
@@ -241,6 +263,8 @@ class ExportOptionsDialog(QDialog):
         self.names.setCurrentIndex([v for v, _ in NAMING_CHOICES].index(options.bone_names))
         form = QFormLayout(self)
         form.addRow("Root motion:", self.root)
+        form.addRow("Speed:", self.speed)
+        form.addRow("", self.speed_source)
         form.addRow("", self.contact)
         form.addRow("", self.loop)
         form.addRow("Bone names:", self.names)
@@ -253,5 +277,6 @@ class ExportOptionsDialog(QDialog):
     def options(self) -> AnimationOptions:
         """The options as the controls show them."""
         return replace(self._options, root_motion=self.root.currentData(),
+                       root_speed_m_s=round(self.speed.value(), 2),
                        ground_contact=self.contact.isChecked(), loop=self.loop.isChecked(),
                        bone_names=self.names.currentData())

@@ -22,7 +22,13 @@ from gaitcore.errors import GaitInputError
 from gaitcore.io.export import EXPORTERS, export_animation, write_preview_video
 from gaitcore.io.pose_table import PoseTable
 from gaitcore.project.footage_fit import footage_maps
-from gaitcore.project.steps import Animation, animate_project, frame_rate, open_source
+from gaitcore.project.steps import (
+    Animation,
+    animate_project,
+    footage_speed,
+    frame_rate,
+    open_source,
+)
 
 VIDEO = ".mp4"
 KINDS = {".csv": "Curves CSV", ".bvh": "BVH", ".glb": "glTF (.glb)", VIDEO: "Preview video"}
@@ -54,13 +60,14 @@ class ExportController(QObject):
         state, asker = self._state, self._documents.asker
         title = f"Export {KINDS[suffix]}"
         if suffix != VIDEO:
-            options = asker.export_options(title, self._animation.options)
+            speed = footage_speed(state.project, state.analysis, state.skeleton, export_fps(state))
+            options = asker.export_options(title, self._animation.options, speed)
             if options is None:
                 return None
             self._animation.set_options(options)
         try:
             animation = animate_project(state.project, state.analysis, state.skeleton,
-                                          self._animation.options)
+                                        self._animation.options, fps=export_fps(state))
         except GaitInputError as exc:
             asker.error(title, f"{exc}; nothing was exported")
             return None
@@ -137,4 +144,5 @@ def _write(path: Path, animation: Animation, fps: float, progress) -> Written:
     table = PoseTable(motion.frames, animation.skeleton.channel_names, motion.poses)
     written = export_animation(path, animation.skeleton, table, fps,
                                naming=animation.options.bone_names)
-    return Written(written, motion.summary())
+    summary = motion.summary() + (f"; {motion.warning}" if motion.warning else "")
+    return Written(written, summary)

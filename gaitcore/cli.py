@@ -210,9 +210,14 @@ def _add_animate(sub) -> None:
                    help="add a time_s column (frame / fps) after 'frame' in CURVES.csv")
     p.add_argument("--loop", action="store_true",
                    help="write one gait cycle that loops (its last frame leads into its first)")
-    p.add_argument("--root", choices=("in-place", "forward", "as-keys"), default=None,
-                   help="horizontal root motion: held in place, forward at the keys' mean "
-                   "speed, or as interpolated (default: in-place with --loop, else forward)")
+    p.add_argument("--root", choices=("in-place", "footage", "forward", "as-keys"), default=None,
+                   help="horizontal root motion: held in place, along the animal's progress in "
+                   "the footage (at the --skeleton's scale), forward at constant speed, or as "
+                   "interpolated (default: in-place with --loop, else footage when the animal "
+                   "crosses the view, else forward)")
+    p.add_argument("--speed", type=float, default=None, metavar="M/S",
+                   help="speed of --root forward, metres per second (default: the footage's, "
+                   "else the keys' roots'); needed when the camera follows the animal")
     p.add_argument("--no-ground-contact", action="store_true",
                    help="leave the feet as interpolated (default: planted through stance and "
                    "kept above the ground by leg IK; needs --skeleton)")
@@ -239,6 +244,8 @@ def _run_animate(args: argparse.Namespace) -> int:
     if args.fps is not None and not (np.isfinite(args.fps) and 0 < args.fps <= MAX_FPS):
         raise GaitInputError(f"--fps must be a number of frames per second in (0, {MAX_FPS:g}], "
                              f"got {args.fps}")
+    if args.speed is not None and not (np.isfinite(args.speed) and 0 < args.speed <= 100):
+        raise GaitInputError(f"--speed must be metres per second in (0, 100], got {args.speed}")
     skeleton = None
     if args.skeleton is not None:
         from gaitcore.project.steps import read_rig
@@ -248,6 +255,11 @@ def _run_animate(args: argparse.Namespace) -> int:
             print(note)
     record = read_analysis_json(args.analysis)
     fps = args.fps or record.fps or DEFAULT_FPS
+    travel = None
+    if skeleton is not None:
+        from gaitcore.project.footage_fit import travel_metres
+
+        travel = travel_metres(record.travel, skeleton)
     table = read_pose_table(args.key_poses)
     if exports:
         pose_matrix(skeleton, table)  # every channel of the skeleton posed, before any work
@@ -263,11 +275,15 @@ def _run_animate(args: argparse.Namespace) -> int:
     motion = export_motion(curves, table.columns, key_poses=record.rows_of(poses),
                            skeleton=skeleton, loop=args.loop, period_frames=record.period_frames,
                            root_motion=args.root or AUTO,
-                           ground_contact=not args.no_ground_contact, first_frame=first)
+                           ground_contact=not args.no_ground_contact, first_frame=first,
+                           travel_m=travel,
+                           speed_m=None if args.speed is None else args.speed / fps)
     out_table = PoseTable(motion.frames, table.columns, motion.poses)
     write_pose_table(args.out, out_table, fps=fps if args.csv_time else None)
     n = len(motion.frames)
     print(f"wrote {args.out} ({n} frames, {len(table.columns)} channels): {motion.summary()}")
+    if motion.warning and skeleton is not None:
+        print(f"gaitcore: warning: {motion.warning} (--speed M/S)", file=sys.stderr)
     _print_contact(motion.contact)
     for flag, path in exports:  # the flag, not the file's suffix, names the format
         EXPORTERS[f".{flag}"].write(path, skeleton, out_table, fps, args.bone_names)

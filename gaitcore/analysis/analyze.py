@@ -23,7 +23,7 @@ import numpy as np
 from gaitcore.analysis.advice import Advice, advise
 from gaitcore.analysis.alternates import loop_angle, propose_alternates
 from gaitcore.analysis.cycles import Cycle, find_cycles
-from gaitcore.analysis.framing import Framing, frame_silhouettes, framing_notes
+from gaitcore.analysis.framing import Framing, footage_travel, frame_silhouettes, framing_notes
 from gaitcore.analysis.image_pca import ImagePCA
 from gaitcore.analysis.kernel import DEFAULT_ALPHA
 from gaitcore.analysis.keyimages import KeySelection, select_key_images
@@ -188,6 +188,16 @@ class Analysis:
         if self.framing is None:
             return ()
         return tuple(int(t) + self.cycle_offset for t in np.flatnonzero(self.framing.partial))
+
+    @property
+    def travel(self) -> np.ndarray | None:
+        """The animal's progress across the view on each analysed frame, in its own heights
+        from the first (:func:`~gaitcore.analysis.framing.footage_travel`): None when it
+        does not cross the view (it stays, or the camera follows it)."""
+        if self.framing is None:
+            return None
+        start = self.first_frame - self.cycle_offset
+        return footage_travel(self.framing, start, start + self.n_frames)
 
     @property
     def n_frames(self) -> int:

@@ -37,6 +37,10 @@ SCALE_CHANGE = 1.1
 """The crops are scaled only when the slow trend of the silhouette's height changes by at least
 this factor over the clip (below it the paper's one window size serves as well)."""
 
+MIN_TRAVEL = 0.5
+"""The animal crosses the view when its track moves by at least this many of its heights
+over the frames analysed (less: it stays in place, or the camera follows it)."""
+
 MAX_UPSCALE = 2.0
 """The most a crop is enlarged to bring it to the steady height (a silhouette that shrank more
 than this is far away, and its pixels are too few to enlarge further)."""
@@ -63,6 +67,11 @@ class Framing:
     height_change : float
         The largest over the smallest of the slow trend of the silhouette's height, over the
         frames kept (1 when the framing was not asked to scale).
+    travel : ndarray of shape (n,)
+        The animal's progress across the view from frame 0, in its own heights: the slow
+        trend of its track divided, frame by frame, by the slow trend of its height (so that
+        an animal walking away, which shrinks, keeps its pace). Positive to the right; all 0
+        with fewer than three frames kept.
     """
 
     lost: np.ndarray
@@ -71,6 +80,7 @@ class Framing:
     sides: tuple[str, ...]
     scales: np.ndarray
     height_change: float
+    travel: np.ndarray
 
     @property
     def left_out(self) -> np.ndarray:
@@ -148,24 +158,45 @@ def frame_silhouettes(roi: RoiClip, *, scale: bool = True,
     kept = np.flatnonzero(~left_out)
     n = lost.size
     ones = np.ones(n)
-    if not scale or kept.size < 3:
-        return replace(roi, lost=left_out), Framing(lost, edge, small, sides, ones, 1.0)
+    if kept.size < 3:
+        return (replace(roi, lost=left_out),
+                Framing(lost, edge, small, sides, ones, 1.0, np.zeros(n)))
     rows_spanned = _heights(roi.crops)
     t = np.arange(n)
     window = longest_period(kept.size)
     log_h = np.interp(t, kept, np.log(np.maximum(rows_spanned[kept], 1.0)))
     trend = slow_trend(log_h, window)
+    centre = np.column_stack([np.interp(t, kept, roi.centers_xy[kept, k]) for k in range(2)])
+    smooth = slow_trend(centre, window)
+    travel = _travel(smooth[:, 0] * roi.scale, np.exp(trend))
+    if not scale:
+        return (replace(roi, lost=left_out),
+                Framing(lost, edge, small, sides, ones, 1.0, travel))
     heights = np.exp(trend[kept])
     change = float(heights.max() / heights.min())
     steady = float(np.median(trend[kept]))
     factors = np.minimum(np.exp(steady - trend), MAX_UPSCALE) if change >= SCALE_CHANGE else ones
-    centre = np.column_stack([np.interp(t, kept, roi.centers_xy[kept, k]) for k in range(2)])
-    smooth = slow_trend(centre, window)
     shift = (smooth - centre) * roi.scale  # where the track's trend lies in each crop, px
     crops = _rescaled(roi.crops, factors, shift, left_out)
     centers = np.where(left_out[:, None], np.nan, smooth)
     return (replace(roi, crops=crops, centers_xy=centers, lost=left_out),
-            Framing(lost, edge, small, sides, factors, change))
+            Framing(lost, edge, small, sides, factors, change, travel))
+
+
+def footage_travel(framing: Framing, start: int, stop: int) -> np.ndarray | None:
+    """The animal's progress over frames ``start`` to ``stop`` (indices of ``framing``'s
+    arrays) from the first of them, in its heights, always positive (the rig faces the way it
+    walks): None when it moves by less than :data:`MIN_TRAVEL` heights."""
+    travel = framing.travel[start:stop] - framing.travel[start]
+    net = float(travel[-1]) if travel.size else 0.0
+    return travel * np.sign(net) if abs(net) >= MIN_TRAVEL else None
+
+
+def _travel(x: np.ndarray, heights: np.ndarray) -> np.ndarray:
+    """Progress of track ``x`` from its first frame, in the heights of the frames it was made
+    in: each step divided by the mean of its two frames' heights (both in crop pixels)."""
+    steps = np.diff(x) / (0.5 * (heights[1:] + heights[:-1]))
+    return np.r_[0.0, np.cumsum(steps)]
 
 
 def _heights(crops: np.ndarray) -> np.ndarray:

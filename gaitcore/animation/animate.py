@@ -50,6 +50,9 @@ class AnalysisRecord:
     first_frame: int = 0
     fps: float | None = None
     """Frame rate of the clip, None when the file does not know it."""
+    travel: np.ndarray | None = None
+    """The animal's progress across the footage on each row, in its own heights from row 0
+    (:attr:`Analysis.travel`); None when it does not cross the view."""
 
     def rows(self, frames: tuple[int, ...] | list[int]) -> tuple[int, ...]:
         """Rows of the arrays for source ``frames``."""
@@ -69,7 +72,8 @@ class AnalysisRecord:
                    None if analysis.alternate_frames is None
                    else tuple(int(f) for f in analysis.alternate_frames),
                    float(analysis.settings.alpha), float(analysis.diagnosis.period_frames),
-                   first_frame=int(analysis.first_frame))
+                   first_frame=int(analysis.first_frame),
+                   travel=None if analysis.travel is None else stored(analysis.travel))
 
 
 def animate_record(

@@ -1,11 +1,13 @@
-"""Root motion of a gait cycle: in place, forward at the clip's mean speed, or as the keys say.
+"""Root motion of a gait cycle: in place, along the footage, forward at constant speed, or as
+the keys say.
 
 The RBF map interpolates every channel as a function of the silhouette's place on its loop,
 which is periodic; the root's horizontal position is not (the animal travels), so the
 interpolated ``root.tx`` slides forward and jumps back once per cycle. Here the horizontal
-root translation is replaced: held still (in place) or moved at constant velocity (forward),
-the velocity fitted to the keys' own root positions. Vertical motion (bounce) stays as
-interpolated: it is periodic.
+root translation is replaced: held still (in place), moved along the animal's own progress
+in the footage (its track, converted to metres by the caller), or at constant velocity
+(forward: a speed given, else the one fitted to the keys' own root positions). Vertical
+motion (bounce) stays as interpolated: it is periodic.
 
 Channels are found by name: the root's horizontal translations are the channels named
 ``<joint>.tx`` and ``<joint>.tz`` (only the root translates in a Gait Studio skeleton, with X
@@ -20,9 +22,10 @@ import numpy as np
 
 from gaitcore.errors import GaitInputError
 
-ROOT_MODES = ("in-place", "forward", "as-keys")
-"""``in-place``: horizontal root translation removed (held at the keys' mean); ``forward``:
-constant velocity fitted to the keys; ``as-keys``: the interpolated root, untouched."""
+ROOT_MODES = ("in-place", "footage", "forward", "as-keys")
+"""``in-place``: horizontal root translation removed (held at the keys' mean); ``footage``:
+along the animal's progress in the footage; ``forward``: constant velocity (given, or fitted
+to the keys); ``as-keys``: the interpolated root, untouched."""
 HORIZONTAL = ("tx", "tz")
 
 
@@ -73,6 +76,7 @@ def key_velocity(key_poses: Mapping[int, np.ndarray], channels: np.ndarray) -> n
 
 def apply_root_motion(curves: np.ndarray, channel_names: Sequence[str], mode: str, *,
                       key_poses: Mapping[int, np.ndarray], frames: np.ndarray | None = None,
+                      velocity: np.ndarray | None = None, path: np.ndarray | None = None,
                       ) -> np.ndarray:
     """Replace the horizontal root translation of ``curves`` as ``mode`` says.
 
@@ -82,24 +86,31 @@ def apply_root_motion(curves: np.ndarray, channel_names: Sequence[str], mode: st
         Interpolated poses.
     channel_names : sequence of str
         The k channel names.
-    mode : {"in-place", "forward", "as-keys"}
+    mode : {"in-place", "footage", "forward", "as-keys"}
     key_poses : mapping of int to ndarray of shape (k,)
         The posed frames, whose root positions give the mean position and speed.
     frames : ndarray of shape (n,), optional
         Clip frame of each row (default 0..n-1): a loop cut from frame 30 moves as frames
         30, 31... did.
+    velocity : ndarray of shape (h,), optional
+        ``forward``'s velocity, metres per frame (default: :func:`key_velocity`).
+    path : ndarray of shape (m,), optional
+        ``footage``'s progress along X on every clip frame (indexed by ``frames`` and the
+        keys' frames), metres; required by that mode.
 
     Returns
     -------
     ndarray of shape (n, k)
-        A copy; ``forward`` puts the root at ``p0 + v * frame`` where the line fitted to the
-        keys passes through their mean position at their mean frame, ``in-place`` at the
+        A copy; ``forward`` puts the root at ``p0 + v * frame`` where the line passes
+        through the keys' mean position at their mean frame, ``footage`` at the keys' mean
+        position plus the path's progress from its mean over the keys, ``in-place`` at the
         keys' mean position.
 
     Raises
     ------
     GaitInputError
-        An unknown mode, or ``forward`` with fewer than two posed frames.
+        An unknown mode, ``forward`` with no velocity and fewer than two posed frames,
+        ``footage`` without a path.
     """
     if mode not in ROOT_MODES:
         raise GaitInputError(f"unknown root motion {mode!r}; use one of {', '.join(ROOT_MODES)}")
@@ -112,7 +123,14 @@ def apply_root_motion(curves: np.ndarray, channel_names: Sequence[str], mode: st
     mean = np.mean([np.asarray(key_poses[int(f)], float)[channels] for f in keys], axis=0)
     if mode == "in-place":
         out[:, channels] = mean
+    elif mode == "footage":
+        if path is None:
+            raise GaitInputError("the footage shows no travel to follow (the animal stays in "
+                                 "view, or the camera follows it): give a speed instead")
+        along = np.asarray(path, float)
+        out[:, channels] = mean
+        out[:, channels[0]] += along[t.astype(int)] - along[keys.astype(int)].mean()
     else:
-        velocity = key_velocity(key_poses, channels)
-        out[:, channels] = mean + (t - keys.mean())[:, None] * velocity
+        v = key_velocity(key_poses, channels) if velocity is None else np.asarray(velocity)
+        out[:, channels] = mean + (t - keys.mean())[:, None] * v
     return out

@@ -8,7 +8,10 @@ frames ``first_frame`` = 100 to 399, and its ``key_frames``, ``alternate_frames`
 the principal component behind each column of ``projections`` (the rhythm's pair first,
 drift removed); ``partial_frames`` are the source frames left out because the animal is only
 partly in view; ``scales`` the factor by which each silhouette given (from source frame
-``silhouettes_first_frame`` on) was enlarged to compare them at a steady height.
+``silhouettes_first_frame`` on) was enlarged to compare them at a steady height; ``travel``
+the animal's progress across the footage on each analysed frame, in its own heights from the
+first (null when it does not cross the view: it stays, or the camera follows it), which
+``animate`` turns into the root's travel.
 """
 
 from __future__ import annotations
@@ -75,6 +78,7 @@ def analysis_to_dict(analysis: Analysis, *, source: str = "", fps: float | None 
         "projections": stored(analysis.coords).tolist(),
         "filtered_projections": stored(d.filtered[:, :pcs]).tolist(),
         "loop_angle": stored(analysis.loop_angle).tolist(),
+        "travel": None if analysis.travel is None else stored(analysis.travel).tolist(),
     }
     if analysis.alternate_frames is not None:
         out["alternate_frames"] = [int(f) for f in analysis.alternate_frames]
@@ -152,7 +156,10 @@ def analysis_record_from_dict(data: object, *, where: str = "analysis") -> Analy
     period = doc.key("period_frames", None).number(lo=0, lo_open=True, hi=MAX_FRAMES,
                                                    optional=True)
     fps = doc.key("fps", None).number(lo=0, lo_open=True, hi=MAX_FPS, optional=True)
+    travel = doc.key("travel", None)
+    travel = None if travel.is_null() else travel.array(min_rows=n, max_rows=n)
     if not keys:
         raise doc.key("key_frames").fail(f"a list of key frames in {first}..{last}")
     return AnalysisRecord(n, proj, filt, theta, keys, alts, alpha,
-                          float("nan") if period is None else period, first_frame=first, fps=fps)
+                          float("nan") if period is None else period, first_frame=first, fps=fps,
+                          travel=travel)

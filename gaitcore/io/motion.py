@@ -7,10 +7,11 @@ called by ``gaitcore animate`` and by the app's Export menu alike:
    so that a loop can be cut without dragging the travel into the mismatch it spreads;
 2. one loop is cut (:func:`gaitcore.animation.weights.loop_cycle`) when asked;
 3. the feet are planted (:func:`gaitcore.rig.contact.clean_ground_contact`) as the animal
-   travels at the keys' speed, across the loop's seam when it is a loop, where the posed
-   frames put them when a stance holds one;
-4. the root motion asked for goes back in: in place, forward at constant speed, or as the
-   keys interpolate it;
+   travels (along its progress in the footage, else at a speed given or the keys'), across
+   the loop's seam when it is a loop, where the posed frames put them when a stance holds
+   one;
+4. the root motion asked for goes back in: in place, along the footage, forward at constant
+   speed, or as the keys interpolate it;
 5. a loop gets a closing frame equal to its first (moved on by one stride when it goes
    forward), so that every format plays it round without a hitch: a glTF player blends the
    last key into the first, Blender's Cycles modifier repeats from the last key.
@@ -39,6 +40,11 @@ AUTO = "auto"
 """Root motion by what is exported: in place for one loop, forward for the whole clip."""
 
 
+SPEED_SOURCES = ("given", "footage", "keys")
+"""Where the root's speed comes from, first found first: a speed the user gave, the animal's
+progress in the footage, the keys' own root positions."""
+
+
 @dataclass(frozen=True, eq=False)
 class ExportMotion:
     """Poses ready to write, and what was done to them.
@@ -55,6 +61,10 @@ class ExportMotion:
         First clip frame of the loop, None for the whole clip.
     contact : ContactResult or None
         The ground contact clean-up, None when it was off or there was no skeleton or feet.
+    speed_m : float
+        The root's mean speed along X, metres per frame (0 in place).
+    speed_source : str
+        One of :data:`SPEED_SOURCES`, or "" when the root does not travel.
     """
 
     frames: np.ndarray
@@ -62,6 +72,13 @@ class ExportMotion:
     root_motion: str
     cycle_start: int | None = None
     contact: ContactResult | None = None
+    speed_m: float = 0.0
+    speed_source: str = ""
+
+    @property
+    def warning(self) -> str | None:
+        """Why the root stands still although it should travel (None when all is well)."""
+        return STANDING_ROOT if self.root_motion == "forward" and not self.speed_m else None
 
     def summary(self) -> str:
         """One line for a status bar or the command's output."""
@@ -69,13 +86,21 @@ class ExportMotion:
                 f"{self.cycle_start}" if self.cycle_start is not None
                 else f"{len(self.frames)} frames")
         contact = self.contact.summary() if self.contact is not None else "ground contact off"
-        return f"{what}, root {self.root_motion}, {contact}"
+        root = f"root {self.root_motion}"
+        if self.speed_source and self.root_motion in ("footage", "forward"):
+            root += f" at {100 * self.speed_m:.1f} cm per frame ({SPEED_NAMES[self.speed_source]})"
+        return f"{what}, {root}, {contact}"
+
+
+SPEED_NAMES = {"given": "speed given", "footage": "from the footage",
+               "keys": "from the keys' roots"}
 
 
 def export_motion(curves: np.ndarray, channel_names: Sequence[str], *,
                   key_poses: Mapping[int, np.ndarray], skeleton: Skeleton | None = None,
                   loop: bool = False, period_frames: float | None = None,
                   root_motion: str = AUTO, ground_contact: bool = True, first_frame: int = 0,
+                  travel_m: np.ndarray | None = None, speed_m: float | None = None,
                   progress: Progress | None = None) -> ExportMotion:
     """Turn interpolated curves into the motion to export.
 
@@ -85,19 +110,28 @@ def export_motion(curves: np.ndarray, channel_names: Sequence[str], *,
         A pose per clip frame, columns ``channel_names``.
     channel_names : sequence of str
     key_poses : mapping of int to ndarray of shape (k,)
-        The posed frames (same columns): their root positions give the speed.
+        The posed frames (same columns): their root positions give the speed when nothing
+        else does.
     skeleton : Skeleton, optional
         Needed for the ground contact clean-up; each of its channels must be a column.
     loop : bool
         Export one gait cycle that loops, cut at ``period_frames``.
     period_frames : float, optional
         Gait period, required with ``loop``.
-    root_motion : {"auto", "in-place", "forward", "as-keys"}
+    root_motion : {"auto", "in-place", "footage", "forward", "as-keys"}
+        ``auto``: in place for a loop; for the whole clip along the footage when
+        ``travel_m`` is given, else forward.
     ground_contact : bool
         Plant the feet (needs ``skeleton``).
     first_frame : int
         Source frame of row 0 of ``curves`` (the start of the trim): the whole clip is
         numbered from it, a loop from 0.
+    travel_m : ndarray of shape (n,), optional
+        The animal's progress along X on each row of ``curves``, metres (its track in the
+        footage at the rig's scale): what ``footage`` follows, and the speed of ``forward``
+        when no speed is given.
+    speed_m : float, optional
+        ``forward``'s speed along X, metres per frame, over any other.
     progress : callable (done, total) -> bool, optional
         Reports the ground contact clean-up; returning False cancels.
 
@@ -108,11 +142,11 @@ def export_motion(curves: np.ndarray, channel_names: Sequence[str], *,
     Raises
     ------
     GaitInputError
-        Unknown root motion, a loop without a usable period or too short a clip, forward
-        motion with fewer than two posed frames, curves without a channel of the skeleton.
+        Unknown root motion, a loop without a usable period or too short a clip,
+        ``footage`` without travel, curves without a channel of the skeleton.
     """
     names = tuple(channel_names)
-    mode = _check(names, skeleton, root_motion, loop)
+    mode = _check(names, skeleton, root_motion, loop, travel_m)
     x = np.asarray(curves, dtype=float)
     still = apply_root_motion(x, names, "in-place", key_poses=key_poses)
     start = None
@@ -120,27 +154,61 @@ def export_motion(curves: np.ndarray, channel_names: Sequence[str], *,
     if loop:
         start, still = loop_cycle(still, float("nan") if period_frames is None else period_frames)
         frames = np.arange(start, start + len(still))
+    velocity, source = root_velocity(names, key_poses, travel_m=travel_m, speed_m=speed_m)
+    path = travel_m if mode == "footage" and not loop else None
     contact = None
     if ground_contact and skeleton is not None and find_feet(skeleton):
         columns = [names.index(c) for c in skeleton.channel_names]
         contact = clean_ground_contact(skeleton, still[:, columns], cyclic=loop,
-                                       travel_m=_travel(names, key_poses, frames),
+                                       travel_m=_travel(names, frames, velocity, path),
                                        anchors=[int(f) - frames[0] for f in key_poses
                                                 if frames[0] <= f <= frames[-1]],
                                        progress=progress)
         still = still.copy()
         still[:, columns] = contact.poses
-    poses = _with_root(still, x, names, mode, key_poses, frames)
+    moving = "forward" if mode == "footage" and loop else mode  # a loop goes at the mean speed
+    poses = _with_root(still, x, names, moving, key_poses, frames, velocity, path)
     if loop:
         closing = poses[:1].copy()
-        closing[0, horizontal_root_channels(names)] += _stride(names, key_poses, len(still), mode)
+        stride = len(still) * velocity if moving == "forward" else 0.0
+        closing[0, horizontal_root_channels(names)] += stride
         poses = np.concatenate([poses, closing])
     numbered = np.arange(len(poses)) + (0 if loop else int(first_frame))
-    return ExportMotion(numbered, poses, mode, start, contact)
+    travels = mode in ("footage", "forward") and velocity.size
+    return ExportMotion(numbered, poses, mode, start, contact,
+                        float(velocity[0]) if travels else 0.0, source if travels else "")
+
+
+STANDING_ROOT = ("the root does not travel: the footage shows none (the camera follows the "
+                 "animal, or it stays in view) and the keys' roots stand still; give the "
+                 "speed, or export in place")
+"""The warning of :attr:`ExportMotion.warning`."""
+
+
+def root_velocity(names: Sequence[str], key_poses: Mapping[int, np.ndarray], *,
+                  travel_m: np.ndarray | None = None, speed_m: float | None = None,
+                  ) -> tuple[np.ndarray, str]:
+    """The root's horizontal velocity (metres per frame, X first) and where it came from
+    (:data:`SPEED_SOURCES`): a speed given, else the footage's mean (the least-squares slope
+    of ``travel_m``), else the keys' (zero with fewer than two keys)."""
+    channels = horizontal_root_channels(names)
+    velocity = np.zeros(channels.size)
+    if channels.size == 0:
+        return velocity, ""
+    if speed_m is not None:
+        velocity[0] = float(speed_m)
+        return velocity, "given"
+    if travel_m is not None and len(travel_m) >= 2:
+        rows = np.arange(len(travel_m), dtype=float)
+        velocity[0] = float(np.polyfit(rows, np.asarray(travel_m, float), 1)[0])
+        return velocity, "footage"
+    if len(key_poses) >= 2:
+        return key_velocity(key_poses, channels), "keys"
+    return velocity, ""
 
 
 def _check(names: tuple[str, ...], skeleton: Skeleton | None, root_motion: str,
-           loop: bool) -> str:
+           loop: bool, travel_m: np.ndarray | None) -> str:
     """The root motion to apply (``auto`` resolved), after checking the request."""
     if root_motion not in (AUTO, *ROOT_MODES):
         raise GaitInputError(f"unknown root motion {root_motion!r}; use one of "
@@ -149,39 +217,37 @@ def _check(names: tuple[str, ...], skeleton: Skeleton | None, root_motion: str,
     if missing:
         raise GaitInputError(f"the curves lack {len(missing)} channel(s) of skeleton "
                              f"{skeleton.name!r} (e.g. {missing[0]}); pose every channel")
-    return ("in-place" if loop else "forward") if root_motion == AUTO else root_motion
+    if root_motion == "footage" and travel_m is None:
+        raise GaitInputError("the footage shows no travel to follow (the camera follows the "
+                             "animal, or it stays in view): give a speed and export forward")
+    if root_motion != AUTO:
+        return root_motion
+    if loop:
+        return "in-place"
+    return "footage" if travel_m is not None else "forward"
 
 
 def _with_root(poses: np.ndarray, curves: np.ndarray, names: tuple[str, ...], mode: str,
-               key_poses: Mapping[int, np.ndarray], frames: np.ndarray) -> np.ndarray:
+               key_poses: Mapping[int, np.ndarray], frames: np.ndarray, velocity: np.ndarray,
+               path: np.ndarray | None) -> np.ndarray:
     """``poses`` with the horizontal root of ``mode`` (``as-keys``: the interpolated one)."""
     if mode != "as-keys":
-        return apply_root_motion(poses, names, mode, key_poses=key_poses, frames=frames)
+        return apply_root_motion(poses, names, mode, key_poses=key_poses, frames=frames,
+                                 velocity=velocity, path=path)
     out = poses.copy()
     channels = horizontal_root_channels(names)
     out[:, channels] = curves[frames][:, channels]
     return out
 
 
-def _velocity(names: tuple[str, ...], key_poses: Mapping[int, np.ndarray]) -> np.ndarray:
-    """Horizontal root velocity of the keys (zero with fewer than two), metres per frame."""
-    channels = horizontal_root_channels(names)
-    if channels.size == 0 or len(key_poses) < 2:
-        return np.zeros(channels.size)
-    return key_velocity(key_poses, channels)
-
-
-def _travel(names: tuple[str, ...], key_poses: Mapping[int, np.ndarray],
-            frames: np.ndarray) -> np.ndarray:
-    """World offset of each frame from travelling at the keys' speed, shape (n, 3)."""
+def _travel(names: tuple[str, ...], frames: np.ndarray, velocity: np.ndarray,
+            path: np.ndarray | None) -> np.ndarray:
+    """World offset of each frame from the animal's travel, shape (n, 3): along ``path``
+    when given, else at constant ``velocity``."""
     travel = np.zeros((len(frames), 3))
     axes = [{"tx": 0, "tz": 2}[names[i].rsplit(".", 1)[-1]]
             for i in horizontal_root_channels(names)]  # X first, as the velocity
-    travel[:, axes] = frames[:, None] * _velocity(names, key_poses)
+    travel[:, axes] = frames[:, None] * velocity
+    if path is not None and axes:
+        travel[:, 0] = np.asarray(path, float)[frames]
     return travel
-
-
-def _stride(names: tuple[str, ...], key_poses: Mapping[int, np.ndarray], period: int,
-            mode: str) -> np.ndarray | float:
-    """How far the closing frame of a loop moves on from its first."""
-    return period * _velocity(names, key_poses) if mode == "forward" else 0.0

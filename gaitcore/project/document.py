@@ -97,6 +97,10 @@ class Silhouettes:
     __hash__ = None  # type: ignore[assignment]
 
 
+MAX_SPEED_M_S = 100.0
+"""The fastest root speed accepted, metres per second (a cheetah runs under 30)."""
+
+
 @dataclass(frozen=True)
 class AnimationOptions:
     """How the animation is computed from the posed keys, in the preview and the exports.
@@ -109,9 +113,12 @@ class AnimationOptions:
         Clamp the RBF weights to [0, 1] (paper 2.4).
     loop : bool
         Play and export one gait cycle, cut at the detected period and closed on itself.
-    root_motion : {"auto", "in-place", "forward", "as-keys"}
+    root_motion : {"auto", "in-place", "footage", "forward", "as-keys"}
         Horizontal root motion of the exports (:func:`gaitcore.io.motion.export_motion`);
-        ``auto`` is in place for a loop, forward for the whole clip.
+        ``auto`` is in place for a loop; for the whole clip, along the animal's progress in
+        the footage when it crosses the view, else forward.
+    root_speed_m_s : float
+        The speed of ``forward``, metres per second, 0 for the footage's (or the keys').
     ground_contact : bool
         Plant the feet through stance and keep them above the ground in the exports.
     bone_names : {"as-is", "rigify"}
@@ -127,6 +134,7 @@ class AnimationOptions:
     clamp: bool = False
     loop: bool = False
     root_motion: str = AUTO
+    root_speed_m_s: float = 0.0
     ground_contact: bool = True
     bone_names: str = "as-is"
 
@@ -134,6 +142,9 @@ class AnimationOptions:
         if self.root_motion not in (AUTO, *ROOT_MODES):
             raise GaitInputError(f"unknown root motion {self.root_motion!r}; use one of "
                                  f"{', '.join((AUTO, *ROOT_MODES))}")
+        if not (np.isfinite(self.root_speed_m_s) and 0 <= self.root_speed_m_s <= MAX_SPEED_M_S):
+            raise GaitInputError(f"the root's speed must be between 0 and {MAX_SPEED_M_S:g} "
+                                 f"metres per second, got {self.root_speed_m_s}")
         if self.bone_names not in BONE_NAMINGS:
             raise GaitInputError(f"unknown bone naming {self.bone_names!r}; use one of "
                                  f"{', '.join(BONE_NAMINGS)}")

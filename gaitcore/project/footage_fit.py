@@ -112,6 +112,16 @@ def skeleton_extent(skeleton: Skeleton) -> SkeletonExtent:
                           float(right - left), (float(left + right) / 2, float(top + bottom) / 2))
 
 
+def travel_metres(travel: np.ndarray | None, skeleton: Skeleton,
+                  fit: FootageFit = FootageFit()) -> np.ndarray | None:
+    """The animal's progress in the footage (in its own heights, :attr:`Analysis.travel`) in
+    the rig's metres: the viewport's placement makes the silhouette's height the rig's
+    side-view height times the fit's scale, so a height of travel is that many metres."""
+    if travel is None:
+        return None
+    return np.asarray(travel, float) * skeleton_extent(skeleton).height_m * fit.scale
+
+
 def silhouette_height_px(silhouettes: Silhouettes) -> float | None:
     """Median height of the tracked silhouettes in source pixels (None: none found)."""
     roi = silhouettes.roi

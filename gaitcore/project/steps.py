@@ -28,6 +28,7 @@ from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.motion import ExportMotion, export_motion
 from gaitcore.progress import Progress
 from gaitcore.project.document import AnimationOptions, Project, Silhouettes
+from gaitcore.project.footage_fit import travel_metres
 from gaitcore.rig.orient import guess_axes, reoriented
 from gaitcore.rig.pose_library import PoseLibrary, shipped_library
 from gaitcore.rig.skeleton import Skeleton
@@ -255,6 +256,11 @@ class Animation:
         Gait period the loop is cut at.
     first_frame : int
         Source frame of row 0 of ``curves`` (the start of the trim).
+    travel_m : ndarray of shape (n,) or None
+        The animal's progress in the footage on each row, in the rig's metres (None: it does
+        not cross the view).
+    fps : float
+        Frame rate of the clip (turns the speed the artist gives into metres per frame).
     """
 
     curves: np.ndarray
@@ -266,6 +272,14 @@ class Animation:
     key_poses: dict[int, np.ndarray] = field(default_factory=dict)
     period_frames: float = float("nan")
     first_frame: int = 0
+    travel_m: np.ndarray | None = None
+    fps: float = DEFAULT_FPS
+
+    @property
+    def given_speed_m(self) -> float | None:
+        """The speed the artist gave, metres per frame (None: from the footage or keys)."""
+        speed = self.options.root_speed_m_s
+        return speed / self.fps if speed > 0 else None
 
     def pose_at(self, frame: int) -> np.ndarray:
         """The pose shown at source frame ``frame`` (the loop repeats in step with the clip;
@@ -284,7 +298,8 @@ class Animation:
                              period_frames=self.period_frames,
                              root_motion=self.options.root_motion,
                              ground_contact=self.options.ground_contact,
-                             first_frame=self.first_frame, progress=progress)
+                             first_frame=self.first_frame, travel_m=self.travel_m,
+                             speed_m=self.given_speed_m, progress=progress)
 
     def exported(self) -> tuple[np.ndarray, np.ndarray]:
         """Source frame numbers and poses to export: every analysed frame, or the cycle
@@ -295,8 +310,13 @@ class Animation:
 
 
 def animate_project(project: Project, analysis: Analysis | None, skeleton: Skeleton,
-                    options: AnimationOptions = AnimationOptions()) -> Animation:
+                    options: AnimationOptions = AnimationOptions(), *,
+                    fps: float = DEFAULT_FPS) -> Animation:
     """Animate the clip from the posed keys (and alternates), as ``gaitcore animate`` does.
+
+    The root travels as the animal does in the footage, at the scale the footage is placed
+    behind the rig (:func:`~gaitcore.project.footage_fit.travel_metres`); ``fps`` turns a
+    speed the artist gives into metres per frame.
 
     The numbers come from :meth:`AnalysisRecord.from_analysis`, those ``analysis.json``
     holds, so an export from the app and from the command agree byte for byte.
@@ -328,7 +348,40 @@ def animate_project(project: Project, analysis: Analysis | None, skeleton: Skele
     if options.loop:
         start, cycle = loop_cycle(curves, analysis.diagnosis.period_frames)
     return Animation(curves, weights, options, skeleton, start, cycle, record.rows_of(poses),
-                     float(analysis.diagnosis.period_frames), record.first_frame)
+                     float(analysis.diagnosis.period_frames), record.first_frame,
+                     travel_metres(record.travel, skeleton, project.footage_fit), float(fps))
+
+
+@dataclass(frozen=True)
+class FootageSpeed:
+    """The animal's speed in the footage, at the scale the footage sits behind the rig.
+
+    Attributes
+    ----------
+    speed_m_s : float
+        Metres per second.
+    stride_m : float
+        Metres per gait cycle (NaN when the analysis found no period).
+    """
+
+    speed_m_s: float
+    stride_m: float
+
+    def describe(self) -> str:
+        stride = f", a stride of {self.stride_m:.2f} m" if np.isfinite(self.stride_m) else ""
+        return f"{self.speed_m_s:.2f} m/s{stride}"
+
+
+def footage_speed(project: Project, analysis: Analysis | None, skeleton: Skeleton,
+                  fps: float) -> FootageSpeed | None:
+    """The animal's mean speed in the footage (None: it does not cross the view, or there is
+    no analysis): what the root follows by default, offered where the camera pans."""
+    travel = None if analysis is None else travel_metres(analysis.travel, skeleton,
+                                                          project.footage_fit)
+    if travel is None or len(travel) < 2:
+        return None
+    per_frame = float(np.polyfit(np.arange(len(travel), dtype=float), travel, 1)[0])
+    return FootageSpeed(per_frame * fps, per_frame * analysis.cycle_frames)
 
 
 def swap_warning_for(project: Project, analysis: Analysis | None) -> str | None:

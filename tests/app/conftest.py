@@ -105,8 +105,9 @@ class ScriptedAsker(Asker):
         self.asked.append(title)
         return self.next_export_path
 
-    def export_options(self, title: str, options):
+    def export_options(self, title: str, options, footage=None):
         self.asked.append(f"{title}: options")
+        self.footage_speed = footage
         return options if self.export_answer == "keep" else self.export_answer
 
     def confirm(self, title: str, message: str) -> bool:

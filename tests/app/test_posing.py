@@ -15,6 +15,7 @@ from gaitcore.io.analysis_file import write_analysis_json
 from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.pose_table import PoseTable, read_pose_table, write_pose_table
 from gaitcore.project.document import AnimationOptions
+from gaitcore.project.steps import FootageSpeed
 from tests.app.posing_helpers import open_demo, pose_keys_truly, pose_with_spin_boxes, true_poses
 
 ARTIFACTS = Path(__file__).resolve().parents[1] / "_artifacts"
@@ -215,14 +216,21 @@ def test_export_options_are_asked_saved_and_undoable(qtbot, window, asker, cante
 
 def test_export_options_dialog_shows_and_returns_the_options(qtbot):
     options = AnimationOptions(loop=True, root_motion="forward", bone_names="rigify")
-    dialog = ExportOptionsDialog(options)
+    dialog = ExportOptionsDialog(options, FootageSpeed(1.25, 1.9))
     qtbot.addWidget(dialog)
     dialog.show()
     qtbot.waitExposed(dialog)
     assert dialog.options() == options
+    assert "1.25 m/s, a stride of 1.90 m" in dialog.speed_source.text()
+    assert dialog.speed.text() == "from the footage"
     dialog.contact.setChecked(False)
     dialog.root.setCurrentIndex(1)
-    assert dialog.options() == replace(options, ground_contact=False, root_motion="in-place")
+    dialog.speed.setValue(1.5)
+    assert dialog.options() == replace(options, ground_contact=False, root_motion="in-place",
+                                       root_speed_m_s=1.5)
+    panning = ExportOptionsDialog(options)
+    qtbot.addWidget(panning)
+    assert "no travel" in panning.speed_source.text()
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     dialog.grab().save(str(ARTIFACTS / "export_options.png"))
 

@@ -189,7 +189,8 @@ def test_animation_options_default_for_older_files_and_are_checked(tmp_path):
     save_project(Project(), tmp_path / "p.gaitproj")
     doc = json.loads((tmp_path / "p.gaitproj").read_text())
     assert doc["animation"] == {"filtered": False, "clamp": False, "loop": False,
-                                "root_motion": "auto", "ground_contact": True,
+                                "root_motion": "auto", "root_speed_m_s": 0.0,
+                                "ground_contact": True,
                                 "bone_names": "as-is"}
     del doc["animation"]  # saved before the options were kept
     (tmp_path / "p.gaitproj").write_text(json.dumps(doc))

@@ -65,6 +65,25 @@ def test_frames_partly_in_view_are_named_and_the_size_evened_out():
     assert (framed.lost == framing.left_out).all()
 
 
+def test_the_travel_is_counted_in_the_animal_s_own_heights_as_it_shrinks():
+    clip = receding_walker()
+    framed, framing = frame_silhouettes(crop_rois(clip))
+    kept = np.flatnonzero(~framing.left_out)
+    steps = np.diff(framing.travel[kept[0]:kept[-1] + 1])
+    assert np.all(steps < 0)  # to the left
+    # the walker crosses at a steady pace in pixels while it shrinks: in its own heights,
+    # its pace grows as its height falls
+    size = 1.0 - 0.45 * np.arange(len(clip)) / (len(clip) - 1)
+    first, last = kept[:6], kept[-6:]
+    grown = size[first].mean() / size[last].mean()
+    assert steps[-5:].mean() / steps[:5].mean() == pytest.approx(grown, rel=0.1)
+    analysis = analyze_silhouettes(crop_rois(clip), AnalysisSettings(key_time_limit_s=5.0))
+    assert analysis.travel is not None and np.all(np.diff(analysis.travel) > 0)
+    staying = np.stack([walker_frame(float(t), STRIDE, size=(120, 200)) for t in range(60)])
+    assert analyze_silhouettes(crop_rois(staying),
+                               AnalysisSettings(key_time_limit_s=5.0)).travel is None
+
+
 def test_the_receding_walk_is_usable_with_its_stride():
     clip = receding_walker()
     analysis = analyze_silhouettes(crop_rois(clip), AnalysisSettings(key_time_limit_s=5.0))

@@ -56,6 +56,42 @@ def test_a_forward_loop_closes_one_stride_ahead(canter):
     np.testing.assert_array_equal(motion.poses[-1, rest], motion.poses[0, rest])
 
 
+def test_the_root_follows_the_footage_where_the_animal_crosses_the_view(canter):
+    horse, curves, keys = canter
+    truth_tx = generate_gait(horse, "canter", FRAMES)[:, horse.channel_index("root.tx")]
+    surge = 0.02 * np.sin(np.arange(FRAMES) / 3.0)  # the track is not a straight line
+    travel = truth_tx - truth_tx[0] + surge
+    rooted = {f: np.where(np.arange(horse.n_channels) == horse.channel_index("root.tx"), 0.0, p)
+              for f, p in keys.items()}  # hoof drags never set the root
+    motion = export_motion(curves, horse.channel_names, key_poses=rooted, skeleton=horse,
+                           travel_m=travel)
+    tx = motion.poses[:, horse.channel_index("root.tx")]
+    assert motion.root_motion == "footage" and motion.speed_source == "footage"
+    np.testing.assert_allclose(np.diff(tx), np.diff(travel), atol=1e-9)
+    assert "from the footage" in motion.summary() and motion.warning is None
+    toes = [horse.joint_index(f.name) for f in motion.contact.feet]
+    assert horse.joint_positions(motion.poses)[:, toes, 1].min() > -0.005
+    loop = export_motion(curves, horse.channel_names, key_poses=rooted, skeleton=horse,
+                         loop=True, period_frames=28.0, root_motion="footage", travel_m=travel)
+    steps = np.diff(loop.poses[:, horse.channel_index("root.tx")])
+    assert np.ptp(steps) < 1e-12 and steps[0] == pytest.approx(np.polyfit(
+        np.arange(FRAMES), travel, 1)[0])  # a loop goes at the footage's mean speed
+
+
+def test_a_speed_given_wins_and_a_root_that_cannot_travel_is_said(canter):
+    horse, curves, keys = canter
+    rooted = {f: np.where(np.arange(horse.n_channels) == horse.channel_index("root.tx"), 0.0, p)
+              for f, p in keys.items()}
+    still = export_motion(curves, horse.channel_names, key_poses=rooted, skeleton=horse)
+    assert still.root_motion == "forward" and "the footage shows none" in still.warning
+    given = export_motion(curves, horse.channel_names, key_poses=rooted, skeleton=horse,
+                          speed_m=0.1, travel_m=np.zeros(FRAMES), root_motion="forward")
+    assert np.diff(given.poses[:, horse.channel_index("root.tx")]) == pytest.approx(0.1)
+    assert given.speed_source == "given" and given.warning is None
+    with pytest.raises(GaitInputError, match="no travel"):
+        export_motion(curves, horse.channel_names, key_poses=keys, root_motion="footage")
+
+
 def test_as_keys_without_contact_is_the_interpolation(canter):
     horse, curves, keys = canter
     motion = export_motion(curves, horse.channel_names, key_poses=keys, skeleton=horse,
