@@ -226,7 +226,8 @@ class PosingController(QObject):
 
     def fit_rig(self) -> Job | None:
         """Fit the rig's proportions and the footage's place to this key's silhouette, in the
-        background; one undo step."""
+        background; one undo step. The fit starts from the template's proportions, so that
+        it does not depend on earlier fits; a poor fit is refused with its reasons."""
         frame, project = self._require_frame(), self._state.project
         if frame is None:
             return None
@@ -234,10 +235,9 @@ class PosingController(QObject):
             self.messageRaised.emit("no silhouettes yet: segment or sketch the clip first")
             return None
         template, pose = self._state.template_skeleton, self.pose_of(frame)
-        start = replace(project.proportions, legs=1.0, neck=1.0, head=1.0, tail=1.0)
 
-        def work(progress) -> RigFit:
-            return fit_rig(template, pose, project.silhouettes, frame, start=start,
+        def work(progress) -> RigFit:  # from the template: the same key, the same fit
+            return fit_rig(template, pose, project.silhouettes, frame,
                            flip=project.footage_fit.flip, progress=progress)
 
         def apply(result: RigFit) -> None:

@@ -51,7 +51,7 @@ from gaitcore.project.document import FootageFit, Silhouettes
 from gaitcore.project.footage_fit import (
     SkeletonExtent,
     reference_image,
-    silhouette_height_px,
+    silhouette_heights_px,
     silhouette_outline_px,
     skeleton_extent,
 )
@@ -384,10 +384,10 @@ class PoseViewport(QWidget):
         silhouettes = self._state.project.silhouettes
         if silhouettes is not self._sil[0]:
             self._sil = (silhouettes,
-                         None if silhouettes is None else silhouette_height_px(silhouettes))
+                         None if silhouettes is None else silhouette_heights_px(silhouettes))
         index, bgr = self._image
         ref = reference_image(bgr, index, self._extent, silhouettes,
-                              fit=self._state.project.footage_fit, height_px=self._sil[1])
+                              fit=self._state.project.footage_fit, heights_px=self._sil[1])
         self._ref = ref
         self.gl_view.set_reference(ref.rgba_xy, self._shifted(ref.transform))
         self._outline_world = []

@@ -161,11 +161,9 @@ def frame_silhouettes(roi: RoiClip, *, scale: bool = True,
     if kept.size < 3:
         return (replace(roi, lost=left_out),
                 Framing(lost, edge, small, sides, ones, 1.0, np.zeros(n)))
-    rows_spanned = _heights(roi.crops)
     t = np.arange(n)
     window = longest_period(kept.size)
-    log_h = np.interp(t, kept, np.log(np.maximum(rows_spanned[kept], 1.0)))
-    trend = slow_trend(log_h, window)
+    trend = _log_height_trend(roi.crops, kept, window)
     centre = np.column_stack([np.interp(t, kept, roi.centers_xy[kept, k]) for k in range(2)])
     smooth = slow_trend(centre, window)
     travel = _travel(smooth[:, 0] * roi.scale, np.exp(trend))
@@ -197,6 +195,45 @@ def _travel(x: np.ndarray, heights: np.ndarray) -> np.ndarray:
     in: each step divided by the mean of its two frames' heights (both in crop pixels)."""
     steps = np.diff(x) / (0.5 * (heights[1:] + heights[:-1]))
     return np.r_[0.0, np.cumsum(steps)]
+
+
+def height_trend(roi: RoiClip) -> np.ndarray | None:
+    """The slow trend of each frame's silhouette height in source pixels, over the frames
+    where one was found and not much smaller than its neighbours' (None: fewer than three):
+    how big the animal is on each frame, its legs' swing and its head's nod left out."""
+    kept = _whole(roi)
+    if kept.size < 3:
+        return None
+    trend = _log_height_trend(roi.crops, kept, longest_period(kept.size))
+    return np.exp(trend) / roi.scale
+
+
+def view_travel(roi: RoiClip) -> float:
+    """The animal's net progress across the view over the clip, in its own heights (as
+    :attr:`Framing.travel`; positive to the right, 0 with fewer than three silhouettes)."""
+    kept = _whole(roi)
+    if kept.size < 3:
+        return 0.0
+    window = longest_period(kept.size)
+    trend = _log_height_trend(roi.crops, kept, window)
+    x = slow_trend(np.interp(np.arange(len(trend)), kept, roi.centers_xy[kept, 0]), window)
+    travel = _travel(x * roi.scale, np.exp(trend))
+    return float(travel[kept[-1]] - travel[kept[0]])
+
+
+def _whole(roi: RoiClip) -> np.ndarray:
+    """Frames with a silhouette not much smaller than its neighbours'."""
+    _, small, _ = partial_frames(roi)
+    return np.flatnonzero(~(np.asarray(roi.lost, dtype=bool) | small))
+
+
+def _log_height_trend(crops: np.ndarray, kept: np.ndarray, window: int) -> np.ndarray:
+    """:func:`~gaitcore.analysis.rhythm.slow_trend` of the log of the rows each crop's
+    silhouette spans, interpolated over the frames not ``kept`` (crop pixels)."""
+    rows_spanned = _heights(crops)
+    t = np.arange(crops.shape[0])
+    log_h = np.interp(t, kept, np.log(np.maximum(rows_spanned[kept], 1.0)))
+    return slow_trend(log_h, window)
 
 
 def _heights(crops: np.ndarray) -> np.ndarray:

@@ -71,6 +71,11 @@ class Silhouettes:
     def n_frames(self) -> int:
         return int(self.roi.crops.shape[0])
 
+    def areas(self) -> np.ndarray:
+        """Each frame's silhouette, pixels of the crops (0 where lost)."""
+        crops = self.roi.crops
+        return np.count_nonzero(crops.reshape(crops.shape[0], -1), axis=1)
+
     def window_xywh(self, frame: int) -> tuple[float, float, float, float] | None:
         """The ROI window of ``frame`` in source pixels (x, y, w, h), None where lost.
 
@@ -154,9 +159,9 @@ class AnimationOptions:
 class FootageFit:
     """How the footage sits behind the skeleton in the 3D viewport, set by the artist.
 
-    The automatic placement scales the frame so that the median silhouette height equals
-    the skeleton's height and puts the silhouette's centre on the skeleton's centre; these
-    correct it.
+    The automatic placement scales each frame so that the animal's height on it (the slow
+    trend of its silhouette's height) equals the skeleton's height and puts the silhouette's
+    centre on the skeleton's centre; these correct it.
 
     Attributes
     ----------

@@ -1,9 +1,11 @@
 """Where the key-image goes in the 3D viewport so that the animal roughly overlaps the skeleton.
 
 The footage is a plane in gaitcore's XY plane, behind the skeleton (negative Z, away from the
-side camera). Its scale makes the median height of the tracked silhouettes equal to the
-skeleton's rest height, and the silhouette's centre of mass in the shown frame (the ROI
-centre, paper Section 2.2) lands on the skeleton's centre (area-weighted centre of its bone
+side camera). Its scale makes the height of the animal in the shown frame (the slow trend of
+its silhouette's height, :func:`gaitcore.analysis.framing.height_trend`, so that an animal
+walking away keeps the rig's size on every frame) equal to the skeleton's rest height, and
+the silhouette's centre of mass in the shown frame (the ROI centre, paper Section 2.2) lands
+on the skeleton's centre (area-weighted centre of its bone
 ellipsoids seen from the side); the project's :class:`~gaitcore.project.document.FootageFit`
 corrects that placement (scale about the anchor, shift, mirror). Only the part of the frame
 around the subject is uploaded, shrunk to at most :data:`MAX_TEXTURE_SIDE` pixels.
@@ -20,6 +22,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from gaitcore.analysis.framing import MIN_TRAVEL, height_trend, view_travel
 from gaitcore.errors import GaitInputError
 from gaitcore.progress import Progress
 from gaitcore.project.document import FootageFit, Silhouettes
@@ -37,30 +40,12 @@ FALLBACK_HEIGHT_SHARE = 0.6
 """Without silhouettes, the skeleton is assumed to fill this share of the frame height."""
 
 
-TRAVEL_SHARE = 0.5
-"""The animal travels across the view when its track moves by at least this share of its
-median silhouette width over the clip (less: it stays, or the camera follows it)."""
-
-
 def travel_direction(silhouettes: Silhouettes) -> int:
     """Which way the animal crosses the view: +1 to the right, -1 to the left, 0 when it
-    does not cross it (it stays in place, or the camera pans with it).
-
-    The least-squares slope of the silhouettes' track over the frames where one was found,
-    times the clip's length, against :data:`TRAVEL_SHARE` of their median width.
-    """
-    roi = silhouettes.roi
-    found = np.flatnonzero(~roi.lost)
-    if found.size < 2:
-        return 0
-    cols = roi.crops[found].any(axis=1)
-    widths = [np.ptp(np.nonzero(c)[0]) + 1 for c in cols if c.any()]
-    if not widths:
-        return 0
-    slope = np.polyfit(found.astype(float), roi.centers_xy[found, 0], 1)[0]
-    travel = slope * (found[-1] - found[0])
-    width = float(np.median(widths)) / roi.scale
-    return 0 if abs(travel) < TRAVEL_SHARE * width else int(np.sign(travel))
+    moves by less than :data:`~gaitcore.analysis.framing.MIN_TRAVEL` of its heights over the
+    clip (it stays in place, or the camera follows it)."""
+    travel = view_travel(silhouettes.roi)
+    return 0 if abs(travel) < MIN_TRAVEL else int(np.sign(travel))
 
 
 def facing_travel(fit: FootageFit, silhouettes: Silhouettes) -> FootageFit:
@@ -115,20 +100,16 @@ def skeleton_extent(skeleton: Skeleton) -> SkeletonExtent:
 def travel_metres(travel: np.ndarray | None, skeleton: Skeleton,
                   fit: FootageFit = FootageFit()) -> np.ndarray | None:
     """The animal's progress in the footage (in its own heights, :attr:`Analysis.travel`) in
-    the rig's metres: the viewport's placement makes the silhouette's height the rig's
-    side-view height times the fit's scale, so a height of travel is that many metres."""
+    the rig's metres: the viewport's placement makes the animal's height on every frame the
+    rig's side-view height times the fit's scale, so a height of travel is that many metres."""
     if travel is None:
         return None
     return np.asarray(travel, float) * skeleton_extent(skeleton).height_m * fit.scale
 
 
-def silhouette_height_px(silhouettes: Silhouettes) -> float | None:
-    """Median height of the tracked silhouettes in source pixels (None: none found)."""
-    roi = silhouettes.roi
-    rows = roi.crops.any(axis=2)
-    heights = [np.ptp(np.nonzero(r)[0]) + 1 for r, lost in zip(rows, roi.lost)
-               if not lost and r.any()]
-    return float(np.median(heights)) / roi.scale if heights else None
+def silhouette_heights_px(silhouettes: Silhouettes) -> np.ndarray | None:
+    """The animal's height on each frame in source pixels (None: too few silhouettes)."""
+    return height_trend(silhouettes.roi)
 
 
 @dataclass(frozen=True)
@@ -153,7 +134,7 @@ class ReferenceImage:
 
 def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
                     silhouettes: Silhouettes | None, *, fit: FootageFit = FootageFit(),
-                    height_px: float | None = None) -> ReferenceImage:
+                    heights_px: np.ndarray | None = None) -> ReferenceImage:
     """Crop, shrink and place footage frame ``bgr`` (source pixels) behind the skeleton.
 
     Parameters
@@ -166,8 +147,8 @@ def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
     fit : FootageFit
         The artist's correction of the automatic placement: scale about the anchor, shift,
         left-right mirror (for an animal moving towards -X in the clip).
-    height_px : float, optional
-        :func:`silhouette_height_px` of ``silhouettes``, when already computed.
+    heights_px : ndarray, optional
+        :func:`silhouette_heights_px` of ``silhouettes``, when already computed.
     """
     img = np.asarray(bgr)
     if img.dtype == bool:
@@ -175,7 +156,8 @@ def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
     if img.ndim == 2:
         img = cv2.cvtColor(img.astype(np.uint8), cv2.COLOR_GRAY2BGR)
     rows, cols = img.shape[:2]
-    (u0, v0), metres_per_px, window = _anchor(frame, skeleton, silhouettes, (cols, rows), height_px)
+    (u0, v0), metres_per_px, window = _anchor(frame, skeleton, silhouettes, (cols, rows),
+                                              heights_px)
     if window is not None:
         x, y, w, h = window
         cx, cy, w, h = x + w / 2, y + h / 2, w * CONTEXT, h * CONTEXT
@@ -212,23 +194,23 @@ def reference_image(bgr: np.ndarray, frame: int, skeleton: SkeletonExtent,
 
 
 def _anchor(frame: int, skeleton: SkeletonExtent, silhouettes: Silhouettes | None,
-            size: tuple[int, int], height_px: float | None):
+            size: tuple[int, int], heights_px: np.ndarray | None):
     """The source pixel that lands on the skeleton's centre, the metres per source pixel of
     the automatic placement, and the ROI window of ``frame`` (None when it has none)."""
     cols, rows = size
     window = (silhouettes.window_xywh(frame)
               if silhouettes is not None and frame < silhouettes.n_frames else None)
-    if height_px is None and silhouettes is not None:
-        height_px = silhouette_height_px(silhouettes)
-    if window is not None and height_px:
+    if heights_px is None and silhouettes is not None:
+        heights_px = silhouette_heights_px(silhouettes)
+    if window is not None and heights_px is not None:
         u0, v0 = (float(v) for v in silhouettes.roi.centers_xy[frame])
-        return (u0, v0), skeleton.height_m / height_px, window
+        return (u0, v0), skeleton.height_m / float(heights_px[frame]), window
     return (cols / 2, rows / 2), skeleton.height_m / (FALLBACK_HEIGHT_SHARE * rows), None
 
 
 def footage_from_world(frame: int, skeleton: SkeletonExtent, silhouettes: Silhouettes | None,
                        size: tuple[int, int], *, fit: FootageFit = FootageFit(),
-                       height_px: float | None = None) -> np.ndarray:
+                       heights_px: np.ndarray | None = None) -> np.ndarray:
     """The affine map from the skeleton's side view (world X, Y in metres) to source pixels
     of frame ``frame``: the inverse of the placement of :func:`reference_image`, so that a
     skeleton drawn with it sits on the footage as it does in the 3D viewport.
@@ -242,15 +224,15 @@ def footage_from_world(frame: int, skeleton: SkeletonExtent, silhouettes: Silhou
     size : (int, int)
         Width and height of the frame, pixels.
     fit : FootageFit
-    height_px : float, optional
-        :func:`silhouette_height_px` of ``silhouettes``, when already computed.
+    heights_px : ndarray, optional
+        :func:`silhouette_heights_px` of ``silhouettes``, when already computed.
 
     Returns
     -------
     ndarray of shape (2, 3)
         ``[u, v] = A @ [X, Y, 1]``.
     """
-    (u0, v0), metres_per_px, _ = _anchor(frame, skeleton, silhouettes, size, height_px)
+    (u0, v0), metres_per_px, _ = _anchor(frame, skeleton, silhouettes, size, heights_px)
     s = metres_per_px * fit.scale
     sign = -1.0 if fit.flip else 1.0
     x0, y0 = skeleton.center_xy[0] + fit.offset_x_m, skeleton.center_xy[1] + fit.offset_y_m
@@ -263,8 +245,8 @@ def footage_maps(frames: list[int] | range, skeleton: Skeleton, silhouettes: Sil
     """:func:`footage_from_world` of each of ``frames`` (source frames), shape (n, 2, 3): what
     :func:`gaitcore.io.export.write_preview_video` needs to draw the skeleton over the footage."""
     extent = skeleton_extent(skeleton)
-    height = silhouette_height_px(silhouettes) if silhouettes is not None else None
-    return np.stack([footage_from_world(f, extent, silhouettes, size, fit=fit, height_px=height)
+    heights = silhouette_heights_px(silhouettes) if silhouettes is not None else None
+    return np.stack([footage_from_world(f, extent, silhouettes, size, fit=fit, heights_px=heights)
                      for f in frames])
 
 
@@ -326,16 +308,23 @@ def fit_rig(template: Skeleton, pose: np.ndarray, silhouettes: Silhouettes, fram
     Raises
     ------
     GaitInputError
-        ``frame`` has no silhouette.
+        ``frame`` has no silhouette, or the fit is poor
+        (:meth:`~gaitcore.rig.silhouette_fit.ProportionsFit.problems`): nothing is fitted.
     """
     window = silhouettes.window_xywh(frame) if 0 <= frame < silhouettes.n_frames else None
-    height_px = silhouette_height_px(silhouettes)
-    if window is None or not height_px:
+    heights = silhouette_heights_px(silhouettes)
+    if window is None or heights is None:
         raise GaitInputError(f"frame {frame} has no silhouette: segment or sketch it, or fit "
                              "the rig on another key")
     crop = silhouettes.roi.crops[frame]
     fit = fit_proportions(crop[:, ::-1] if flip else crop, template, pose, start=start,
                           progress=progress)
+    problems = fit.problems()
+    if problems:
+        raise GaitInputError(
+            f"the rig does not fit frame {frame} ({'; '.join(problems)}): the rig is left as it "
+            "was; check the silhouette of this frame, pose the key roughly, or fit on another "
+            "key")
     rig = proportioned(template, fit.proportions)
     extent = skeleton_extent(rig)
     k = silhouettes.roi.scale
@@ -346,7 +335,7 @@ def fit_rig(template: Skeleton, pose: np.ndarray, silhouettes: Silhouettes, fram
     anchor = np.array([col - fit.origin_px[0], fit.origin_px[1] - row]) * fit.metres_per_px
     lift = rig.offsets[0, 1] - template.offsets[0, 1]  # the fit posed the template's root
     follow = rig.joint_positions(pose)[0, 0] - rig.offsets[0, 0]  # the viewport follows the root
-    footage = FootageFit(scale=fit.metres_per_px * k * height_px / extent.height_m,
+    footage = FootageFit(scale=fit.metres_per_px * k * float(heights[frame]) / extent.height_m,
                          offset_x_m=float(anchor[0] - extent.center_xy[0] - follow),
                          offset_y_m=float(anchor[1] + lift - extent.center_xy[1]), flip=flip)
     return RigFit(fit.proportions, footage, fit)

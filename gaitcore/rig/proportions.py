@@ -86,6 +86,33 @@ def body_parts(skeleton: Skeleton) -> tuple[str, ...]:
     return tuple(out)
 
 
+def _level_legs(skeleton: Skeleton, offsets: np.ndarray) -> None:
+    """Move each leg's attachment (a left or right joint under a centre one) along Y so that
+    the lowest point of every leg keeps its height relative to the others' (in place)."""
+    attachments = [j for j, joint in enumerate(skeleton.joints)
+                   if joint.side != "C" and skeleton.parents[j] >= 0
+                   and skeleton.joints[skeleton.parents[j]].side == "C"]
+    if len(attachments) < 2:
+        return
+    below = {j: _subtree(skeleton, j) for j in attachments}
+    rest = skeleton.rest_pose()
+    before = skeleton.joint_positions(rest)[:, 1]
+    scaled = Skeleton(name=skeleton.name, joints=tuple(
+        replace(j, offset=tuple(float(v) for v in o)) for j, o in zip(skeleton.joints, offsets)))
+    after = scaled.joint_positions(rest)[:, 1]
+    change = np.array([before[below[j]].min() - after[below[j]].min() for j in attachments])
+    offsets[attachments, 1] += change - change.mean()
+
+
+def _subtree(skeleton: Skeleton, top: int) -> np.ndarray:
+    """``top`` and every joint below it."""
+    inside = np.zeros(skeleton.n_joints, dtype=bool)
+    inside[top] = True
+    for j in range(top + 1, skeleton.n_joints):  # parents come before their children
+        inside[j] = skeleton.parents[j] >= 0 and inside[skeleton.parents[j]]
+    return np.flatnonzero(inside)
+
+
 @lru_cache(maxsize=16)
 def proportioned(skeleton: Skeleton, proportions: RigProportions) -> Skeleton:
     """``skeleton`` with each part's bone lengths scaled, standing at the same ground height.
@@ -99,9 +126,12 @@ def proportioned(skeleton: Skeleton, proportions: RigProportions) -> Skeleton:
     -------
     Skeleton
         ``skeleton`` itself when every scale is 1; otherwise a new skeleton with the same
-        joints, channels and limits, the offsets scaled by part and the root's rest height
-        changed so that the lowest joint of the rest pose stays where it was. The result is
-        cached: the same arguments give the same object.
+        joints, channels and limits, the offsets scaled by part, each leg's attachment to
+        the trunk (shoulder blade, hip) moved up or down so that every leg still reaches
+        as low as the others did (fore and hind legs of different lengths shorten by
+        different amounts), and the root's rest height changed so that the lowest joint of
+        the rest pose stays where it was. The result is cached: the same arguments give the
+        same object.
 
     Examples
     --------
@@ -116,6 +146,7 @@ def proportioned(skeleton: Skeleton, proportions: RigProportions) -> Skeleton:
     scales = np.array([proportions.scale_of(p) for p in body_parts(skeleton)])
     offsets = skeleton.offsets * scales[:, None]
     offsets[0] = skeleton.offsets[0]
+    _level_legs(skeleton, offsets)
     joints = [replace(j, offset=tuple(float(v) for v in o))
               for j, o in zip(skeleton.joints, offsets)]
     scaled = Skeleton(name=skeleton.name, joints=tuple(joints))

@@ -42,6 +42,15 @@ the posed rig (wrong pose, rider, occlusion) cannot stretch a part to a limit.""
 POWELL_PASSES = 20
 """Passes over the parameters per Powell run (each pass is a line search per parameter)."""
 PROBE_MARGIN_M = 0.4
+POOR_OVERLAP = 0.45
+"""Below this intersection over union the fit is reported as poor (a rider or a saddle
+cloth, outside any rig, keeps a good fit of a ridden horse above it)."""
+BOX_TOLERANCE = 0.15
+"""The fitted rig's side view may be off the silhouette's middle (across) or bottom (up), or
+differ from its length, by this share of the silhouette's box (its top and height are not
+compared: a rider adds to them)."""
+LEG_SHARE = (0.4, 0.7)
+"""The legs' free length over the withers' height of a plausible quadruped."""
 
 
 @dataclass(frozen=True)
@@ -61,7 +70,11 @@ class ProportionsFit:
     body_length_m, withers_height_m, leg_length_m : float
         Measures of the fitted rig at rest: trunk length (pelvis to the base of the neck),
         height of the highest joint of the trunk or the shoulder blades above the lowest foot,
-        and the longest leg from where it hangs (shoulder blade, hip) to its end, metres.
+        and the legs' free length, from the underside of the trunk (the belly, as drawn) to
+        the ground, metres.
+    rig_box, silhouette_box : tuple of 4 float
+        ``(x, y, width, height)`` in the mask's pixels of the fitted rig's side view (what of
+        it lies inside the mask's frame and beyond) and of the silhouette.
     """
 
     proportions: RigProportions
@@ -71,6 +84,28 @@ class ProportionsFit:
     body_length_m: float
     withers_height_m: float
     leg_length_m: float
+    rig_box: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    silhouette_box: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+
+    def problems(self) -> tuple[str, ...]:
+        """Why the fit cannot be trusted, one phrase each (empty: it can): an overlap under
+        :data:`POOR_OVERLAP`, a rig whose side view is off the silhouette's place or length
+        by more than :data:`BOX_TOLERANCE` of it, legs outside :data:`LEG_SHARE` of the
+        withers' height."""
+        out = []
+        if self.overlap < POOR_OVERLAP:
+            out.append(f"the rig covers only {100 * self.overlap:.0f}% of the silhouette")
+        (rx, ry, rw, rh), (sx, sy, sw, sh) = self.rig_box, self.silhouette_box
+        off_x = abs((rx + rw / 2) - (sx + sw / 2)) / max(sw, 1.0)
+        off_y = abs((ry + rh) - (sy + sh)) / max(sh, 1.0)  # the feet on the silhouette's
+        if max(off_x, off_y) > BOX_TOLERANCE:
+            out.append("the rig sits off the silhouette")
+        if abs(rw / max(sw, 1.0) - 1.0) > BOX_TOLERANCE:
+            out.append(f"the rig is {rw / max(sw, 1.0):.0%} of the silhouette's length")
+        share = self.leg_length_m / max(self.withers_height_m, 1e-9)
+        if not LEG_SHARE[0] <= share <= LEG_SHARE[1]:
+            out.append(f"legs of {share:.0%} of the withers' height")
+        return tuple(out)
 
 
 class _SideView:
@@ -189,7 +224,9 @@ def fit_proportions(mask: np.ndarray, skeleton: Skeleton, pose: np.ndarray, *,
     cover = view.coverage(scales, mpp, origin, m.shape)
     overlap = float(np.minimum(cover, target).sum() / max(np.maximum(cover, target).sum(), 1e-9))
     return ProportionsFit(props, mpp, (float(origin[0]), float(origin[1])), overlap,
-                          *rig_measures(skeleton, props))
+                          *rig_measures(skeleton, props),
+                          rig_box=_rig_box(view, scales, mpp, origin),
+                          silhouette_box=_box(m))
 
 
 def _minimise(loss, x0: np.ndarray, progress: Progress | None):
@@ -227,22 +264,49 @@ def _start(view: _SideView, mask: np.ndarray, start: RigProportions, part_of: np
     return np.r_[np.log(mpp), origin, [np.log(start.scale_of(p)) for p in parts]]
 
 
+def _box(mask: np.ndarray) -> tuple[float, float, float, float]:
+    rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+    return (float(cols[0]), float(rows[0]), float(cols[-1] - cols[0] + 1),
+            float(rows[-1] - rows[0] + 1))
+
+
+def _rig_box(view: _SideView, scales: np.ndarray, metres_per_px: float,
+             origin: np.ndarray) -> tuple[float, float, float, float]:
+    """The side-view box of the fitted rig in the mask's pixels, drawn on a canvas large
+    enough to hold it wherever it lies."""
+    pos = view.positions(scales)
+    px = np.column_stack([origin[0] + pos[:, 0] / metres_per_px,
+                          origin[1] - pos[:, 1] / metres_per_px])
+    margin = PROBE_MARGIN_M / metres_per_px
+    lo = np.floor(px.min(axis=0) - margin)
+    shape = tuple(int(v) for v in np.ceil(px.max(axis=0) + margin - lo)[::-1])
+    cover = view.coverage(scales, metres_per_px, origin - lo, shape) > 0.5
+    if not cover.any():
+        return (float(origin[0]), float(origin[1]), 0.0, 0.0)
+    x, y, w, h = _box(cover)
+    return (x + lo[0], y + lo[1], w, h)
+
+
 def rig_measures(skeleton: Skeleton, proportions: RigProportions) -> tuple[float, float, float]:
-    """Body length, height at the withers and the longest leg of the proportioned rig at rest."""
+    """Body length, height at the withers and the legs' free length (the underside of the
+    trunk's ellipsoids above the lowest foot) of the proportioned rig at rest."""
     from gaitcore.rig.proportions import proportioned
 
     rig = proportioned(skeleton, proportions)
-    pos = rig.joint_positions(rig.rest_pose())
+    world = rig.forward_kinematics(rig.rest_pose())
+    pos = world[:, :3, 3]
     parts = np.array(body_parts(rig))
     trunk = [j for j, joint in enumerate(rig.joints) if joint.side == "C" and parts[j] == "body"]
     body_length = float(np.ptp(pos[trunk, 0])) if trunk else 0.0
     tops = [j for j, joint in enumerate(rig.joints) if parts[j] == "body"]  # trunk, shoulder blades
-    withers = float(pos[tops, 1].max() - pos[:, 1].min())
-    legs = []
-    for j, joint in enumerate(rig.joints):
-        if parts[j] == "legs" and j not in rig.parents:  # a leg's end: walk up to its top
-            top = j
-            while parts[rig.parents[top]] == "legs":
-                top = int(rig.parents[top])
-            legs.append(float(np.linalg.norm(pos[j] - pos[int(rig.parents[top])])))
-    return body_length, withers, max(legs, default=0.0)
+    ground = float(pos[:, 1].min())
+    withers = float(pos[tops, 1].max() - ground)
+    bellies = []
+    for b in rig.bone_ellipsoids():
+        if b.child in trunk:
+            rot = world[b.joint, :3, :3]
+            centre = rot @ b.center + pos[b.joint]
+            reach = np.sqrt(((rot @ (b.axes * b.radii)) ** 2).sum(axis=1))[1]
+            bellies.append(float(centre[1] - reach))
+    legs = (min(bellies) if bellies else float(pos[trunk, 1].min()) if trunk else ground) - ground
+    return body_length, withers, max(legs, 0.0)
