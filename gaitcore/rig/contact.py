@@ -8,9 +8,11 @@ in its lowest phase) and slow it is in stance: it is brought down and planted at
 the ground for the whole stance, blended in over a few frames before touch-down and out after
 lift-off, and everywhere else it is only lifted out of the ground.
 :func:`gaitcore.rig.ik.solve_chain` moves the leg onto each target within its joint limits,
-changing its angles as little as it can, the foot keeping its orientation; nothing but the
-legs' rotations changes (a leg under a body that rides too high cannot reach: the report's
-``worst_miss_m`` says by how much).
+changing its angles as little as it can, the foot keeping its orientation. Where a leg cannot
+reach (a body that rides too high in stance, or too low for a leg that cannot fold out of
+the ground), the body's height follows: on every frame with a foot in stance the lowest foot
+is brought onto the ground, and on every frame no foot stays under it (the report's
+``body_shift_m`` says by how much the body moved).
 
 The motion is judged in the frame of the travelling animal: ``travel`` adds the distance
 covered to every pose, so an in-place cycle is cleaned as the forward motion it stands for.
@@ -62,6 +64,10 @@ class ContactSettings:
         Shorter low-and-slow runs are not stances.
     max_gap_frames : int
         Stances separated by at most this many frames are one stance (interpolation jitter).
+    max_plant_m : float
+        A foot is planted only on the frames of its stance where it lies within this
+        distance (along the ground) of where it is planted: a long low run of a foot that
+        moves on with the body is not held back by a leg stretched past its reach.
 
     Raises
     ------
@@ -77,10 +83,12 @@ class ContactSettings:
     blend_frames: int = 3
     min_stance_frames: int = 3
     max_gap_frames: int = 2
+    max_plant_m: float = 0.3
 
     def __post_init__(self) -> None:
         if min(self.height_m, self.speed_ratio, self.min_speed_m, self.speed_window,
-               self.blend_frames, self.max_gap_frames) < 0 or self.min_stance_frames < 1:
+               self.blend_frames, self.max_gap_frames, self.max_plant_m) < 0 \
+                or self.min_stance_frames < 1:
             raise GaitInputError("ground contact thresholds must be zero or positive and a "
                                  "stance at least one frame long")
 
@@ -124,11 +132,15 @@ class ContactResult:
     stance : ndarray of bool, shape (n, F)
         Stance of each foot in ``feet`` order.
     feet : tuple of FootReport
+    body_shift_m : float
+        The largest change of the body's height that brought the lowest foot onto the
+        ground, metres (0 where the legs reached).
     """
 
     poses: np.ndarray
     stance: np.ndarray
     feet: tuple[FootReport, ...]
+    body_shift_m: float = 0.0
 
     def summary(self) -> str:
         """One line: how far the feet were moved, e.g. for a status bar."""
@@ -140,8 +152,10 @@ class ContactResult:
         head = (f"{len(planted)} feet planted" if not never else
                 f"{len(planted)} of {len(self.feet)} feet planted ({', '.join(never)} never "
                 "in stance)")
+        body = (f", body height changed by up to {100 * self.body_shift_m:.1f} cm"
+                if self.body_shift_m >= 0.0005 else "")
         return (f"ground contact: {head}, moved up to {100 * worst.max_shift_m:.1f} cm "
-                f"({worst.name})")
+                f"({worst.name}){body}")
 
 
 def find_feet(skeleton: Skeleton) -> tuple[str, ...]:
@@ -205,8 +219,9 @@ def clean_ground_contact(skeleton: Skeleton, poses: np.ndarray, *,
     index = [skeleton.joint_index(f) for f in feet]
     before = skeleton.joint_positions(p)[:, index] + travel[:, None, :]
     speed = _ground_speed(travel)
-    stance = np.stack([stance_mask(before[:, i], ground, animal_speed_m=speed,
-                                   settings=settings) for i in range(len(feet))], axis=1)
+    stance = np.stack([_within_reach(before[:, i], stance_mask(
+        before[:, i], ground, animal_speed_m=speed, settings=settings), anchored, settings)
+        for i in range(len(feet))], axis=1)
     heels = [_foot_joint(skeleton, f) for f in feet]
     heel_y = skeleton.joint_positions(p)[:, [skeleton.joint_index(h or f)
                                             for h, f in zip(heels, feet)], 1]
@@ -219,10 +234,25 @@ def clean_ground_contact(skeleton: Skeleton, poses: np.ndarray, *,
     if cyclic and len(p) > n:
         out, before, targets, stance, travel = (a[n:2 * n] for a in
                                                 (out, before, targets, stance, travel))
+    out, body_shift = _feet_on_ground(skeleton, out, index, stance, ground)
     after = skeleton.joint_positions(out)[:, index] + travel[:, None, :]
     reports = tuple(_report(name, before[:, i], after[:, i], targets[:, i], stance[:, i],
                             ground) for i, name in enumerate(feet))
-    return ContactResult(out, stance, reports)
+    return ContactResult(out, stance, reports, body_shift)
+
+
+def _feet_on_ground(skeleton: Skeleton, poses: np.ndarray, feet: list[int], stance: np.ndarray,
+                    ground: float) -> tuple[np.ndarray, float]:
+    """The body raised or lowered so that the lowest foot stands on the ground on frames
+    with a foot in stance, and raised out of it elsewhere (the root's height channel; left
+    as it is without one). Returns the poses and the largest change, metres."""
+    if "ty" not in skeleton.joints[0].channels or not feet:
+        return poses, 0.0
+    lowest = skeleton.joint_positions(poses)[:, feet, 1].min(axis=1)
+    change = np.where(stance.any(axis=1), ground - lowest, np.maximum(ground - lowest, 0.0))
+    out = poses.copy()
+    out[:, skeleton.channel_index(f"{skeleton.joints[0].name}.ty")] += change
+    return out, float(np.abs(change).max(initial=0.0))
 
 
 def _solve_frames(skeleton: Skeleton, poses: np.ndarray, feet: tuple[str, ...],
@@ -279,6 +309,29 @@ def stance_mask(foot_xyz: np.ndarray, ground_y_m: float, *, animal_speed_m: floa
     return mask
 
 
+def _spot(foot: np.ndarray, start: int, stop: int, anchored: np.ndarray) -> np.ndarray:
+    """Where a stance from ``start`` to ``stop`` plants the foot along the ground (x, z):
+    where the posed frames in it put the foot, else the median of the run."""
+    trusted = start + np.flatnonzero(anchored[start:stop])
+    where = foot[trusted] if trusted.size else foot[start:stop]
+    return np.array([np.median(where[:, 0]), np.median(where[:, 2])])
+
+
+def _within_reach(foot: np.ndarray, stance: np.ndarray, anchored: np.ndarray,
+                  settings: ContactSettings) -> np.ndarray:
+    """``stance`` kept on the frames where the foot lies within ``max_plant_m`` of where its
+    stance plants it (shorter runs than the minimum dropped)."""
+    out = stance.copy()
+    for start, stop in true_runs(stance):
+        off = np.linalg.norm(foot[start:stop][:, [0, 2]] - _spot(foot, start, stop, anchored),
+                             axis=1)
+        out[start:stop] = off <= settings.max_plant_m
+    for start, stop in true_runs(out):
+        if stop - start < settings.min_stance_frames:
+            out[start:stop] = False
+    return out
+
+
 def _targets(foot: np.ndarray, heel_rise: np.ndarray, stance: np.ndarray,
              anchored: np.ndarray, ground: float, blend: int) -> np.ndarray:
     """Where the foot should be in each frame: planted in stance, blended near it, and with
@@ -288,9 +341,8 @@ def _targets(foot: np.ndarray, heel_rise: np.ndarray, stance: np.ndarray,
     weight = np.zeros(n)
     shift = np.zeros_like(foot)
     for start, stop in true_runs(stance):
-        trusted = start + np.flatnonzero(anchored[start:stop])
-        where = foot[trusted] if trusted.size else foot[start:stop]
-        spot = np.array([np.median(where[:, 0]), ground, np.median(where[:, 2])])
+        x, z = _spot(foot, start, stop, anchored)
+        spot = np.array([x, ground, z])
         for t in range(max(0, start - blend), min(n, stop + blend)):
             gap = max(start - t, t - (stop - 1), 0)
             w = 1.0 if gap == 0 else _smooth(1.0 - gap / (blend + 1))

@@ -69,8 +69,11 @@ def test_spoiled_legs_are_planted_and_lifted_out_of_the_ground(horse, gait):
     assert low > -0.005
     assert slip <= 0.01
     legs = [i for i, n in enumerate(horse.channel_names) if n[:2] in ("L_", "R_")]
-    others = [i for i in range(horse.n_channels) if i not in legs]
+    height = horse.channel_index("root.ty")
+    others = [i for i in range(horse.n_channels) if i not in legs and i != height]
     assert np.array_equal(result.poses[:, others], spoiled[:, others])
+    # where the legs reach, the body's height keeps the lowest foot on the ground: a nudge
+    assert result.body_shift_m < 0.01
     truth_stance = stance_mask(gait, FRAMES)
     for i, foot in enumerate(find_feet(horse)):
         limb = foot[0] + ("F" if "fore" in foot else "H")
@@ -98,6 +101,22 @@ def test_a_stance_holding_a_posed_frame_is_planted_where_the_pose_put_the_foot(h
     assert np.abs(horse.joint_positions(free.poses)[key, toe] + travel[key] - spot)[0] > 2e-3
 
 
+def test_a_body_too_high_is_brought_down_until_a_foot_stands(horse):
+    truth, travel = _in_place(horse, "walk")
+    high = truth.copy()
+    high[:, horse.channel_index("root.ty")] += 0.2  # the legs cannot reach the ground
+    result = clean_ground_contact(horse, high, travel_m=travel)
+    feet = [horse.joint_index(f) for f in find_feet(horse)]
+    lowest = horse.joint_positions(result.poses)[:, feet, 1].min(axis=1)
+    ground = horse.joint_positions(horse.rest_pose())[feet, 1].min()
+    stance = result.stance.any(axis=1)
+    assert stance.mean() > 0.9  # a walk: a foot on the ground at every moment
+    np.testing.assert_allclose(lowest[stance], ground, atol=1e-9)
+    assert lowest.min() >= ground - 1e-9
+    assert 0.0 < result.body_shift_m <= 0.2 + 1e-9  # the straightened legs reach part of it
+    assert "body height changed by up to" in result.summary()
+
+
 def test_true_motion_is_nearly_untouched(horse):
     """The synthetic hooves are planted in the side view only: as the trunk rolls and yaws
     they slide sideways (up to 2.5 cm a frame). Planting them moves them sideways, little else."""
@@ -119,7 +138,7 @@ def test_a_cycle_stays_a_cycle(horse):
     pos = horse.joint_positions(result.poses)
     wrap = np.linalg.norm(pos[0] - pos[-1], axis=1).max()
     inner = np.linalg.norm(np.diff(pos, axis=0), axis=2).max()
-    assert wrap <= inner + 1e-9  # the step from the last frame to the first is an ordinary one
+    assert wrap <= 1.1 * inner  # the step from the last frame to the first is an ordinary one
     alone = clean_ground_contact(horse, cycle, travel_m=travel[:period])
     assert not np.allclose(alone.poses, result.poses)  # the ends were cleaned as a loop
 
