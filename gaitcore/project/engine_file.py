@@ -190,7 +190,9 @@ def saved_frames_to_check(path: str | os.PathLike, project: Project) -> tuple[in
         if not doc.key("arrays").has("states"):
             return None
         n = doc.key("n_frames").integer(lo=1, hi=MAX_ENGINE_FRAMES)
-        return frames_to_check(_frame_states(_array(doc, side, "states", "f", 2), n))
+        return frames_to_check(_frame_states(_array(doc, side, "states", "f", 2), n),
+                               None if project.silhouettes is None
+                               else project.silhouettes.areas())
 
     return _read_matching(path, engine_fingerprint(project), states)
 

@@ -190,10 +190,14 @@ class RotoSession:
 
     def to_check(self, project: Project) -> tuple[int, ...]:
         """The frames of ``project``'s segmentation worth the artist's look
-        (:attr:`FrameState.to_check`: lost, or of a low confidence, and not corrected); none
-        when the session holds no segmentation of its inputs."""
+        (:func:`frames_to_check`: lost, of a low confidence, or grown or shrunk suddenly, and
+        not corrected); none when the session holds no segmentation of its inputs."""
         state = self._matching(project)
-        return () if state is None else frames_to_check(state.states)
+        if state is None:
+            return ()
+        silhouettes = project.silhouettes
+        return frames_to_check(state.states,
+                               None if silhouettes is None else silhouettes.areas())
 
     def _matching(self, project: Project) -> _EngineState | None:
         """The state (current or kept for undo) of ``project``'s inputs, or None."""

@@ -135,10 +135,23 @@ class FrameState:
         return not self.corrected and (self.lost or self.confidence < DOUBTFUL_BELOW)
 
 
-def frames_to_check(states: Sequence[FrameState]) -> tuple[int, ...]:
+SUDDEN_CHANGE = 1.3
+"""A silhouette this many times larger or smaller than the frame's before is worth a look (a
+walking animal's changes by a tenth or so from one frame to the next)."""
+
+
+def frames_to_check(states: Sequence[FrameState],
+                    areas: np.ndarray | None = None) -> tuple[int, ...]:
     """The positions of the :attr:`FrameState.to_check` states (frame numbers, for a whole
-    clip's states in order)."""
-    return tuple(t for t, st in enumerate(states) if st.to_check)
+    clip's states in order), and with ``areas`` (each frame's silhouette, pixels) those not
+    corrected whose silhouette grew or shrank by :data:`SUDDEN_CHANGE` since the frame
+    before."""
+    check = {t for t, st in enumerate(states) if st.to_check}
+    if areas is not None and len(areas) == len(states) > 1:
+        a = np.maximum(np.asarray(areas, float), 1.0)
+        jumps = np.abs(np.diff(np.log(a))) > np.log(SUDDEN_CHANGE)
+        check |= {int(t) + 1 for t in np.flatnonzero(jumps) if not states[t + 1].corrected}
+    return tuple(sorted(check))
 
 
 class RotoSegmentation:
@@ -279,7 +292,9 @@ class RotoSegmentation:
 
         Each stroked frame is cut again with all its strokes as hard labels, starting from its
         current mask; the change travels forward and backward up to the neighbouring key
-        frames.
+        frames. Strokes of one kind on a frame change the frames they reach one way only:
+        background strokes take subject away and add none (a blob of ground does not come
+        in where the rider goes out), subject strokes add and take none away.
 
         Returns
         -------
@@ -289,10 +304,39 @@ class RotoSegmentation:
         self.scribbles = self.scribbles + tuple(scribbles)
         lo, hi = self.n, 0
         for k in sorted({sc.frame for sc in scribbles}):
+            labels = {sc.label for sc in scribbles if sc.frame == k}
+            reach = self._reach(k)
+            before = {t: self._final(t).mask for t in reach} if len(labels) == 1 else {}
             self.keys[k] = self._key_cut(k, self._final(k).mask.astype(np.float32))
             first, stop = self._repropagate(k, progress)
+            if before:
+                self._one_way(before, subject=labels == {"subject"})
             lo, hi = min(lo, first), max(hi, stop)
         return lo, hi
+
+    def _reach(self, k: int) -> range:
+        """The frames a correction of frame ``k`` re-propagates to, before it is a key frame:
+        between the key frames around it (the key frames themselves left out, ``k`` in)."""
+        prev = max([f for f in self.keys if f < k], default=-1)
+        nxt = min([f for f in self.keys if f > k], default=self.n)
+        return range(prev + 1, nxt)
+
+    def _one_way(self, before: dict[int, np.ndarray], *, subject: bool) -> None:
+        """Each frame of ``before`` (its mask before a correction) only gains subject
+        (``subject``) or only loses it: its key cut or both passes' cuts bounded by it."""
+        for t, mask in before.items():
+            stores = ((self.keys,) if t in self.keys else ()) + (self.fwd, self.bwd)
+            for store in stores:
+                cut = store.get(t)
+                if cut is None:
+                    continue
+                bounded = (cut.mask | mask) if subject else (cut.mask & mask)
+                if not np.array_equal(bounded, cut.mask):
+                    bounded_cut = Cut(bounded.astype(np.uint8), cut.confidence)
+                    if store is self.keys:
+                        self.keys[t] = bounded_cut
+                    else:
+                        store.put(t, bounded_cut)
 
     def erase(self, indices: Collection[int], progress: Progress | None = None
               ) -> tuple[int, int]:

@@ -138,9 +138,10 @@ def test_a_cancelled_correction_changes_nothing_and_the_next_one_is_right(qtbot,
     job = window.tools.roto.paint(stroke)
     with qtbot.waitSignal(job.succeeded, timeout=60_000):
         pass
-    # The same as segmenting the clip with that one stroke from the start: nothing of the
-    # cancelled correction is left in the engine.
-    fresh = RotoSession.start(window.state.source, segmented.with_scribbles((stroke,)))
+    # The same as that one correction on a fresh segmentation: nothing of the cancelled
+    # correction is left in the engine.
+    fresh = RotoSession.start(window.state.source, segmented)
+    fresh.correct(segmented, [stroke])
     assert window.state.project.silhouettes == fresh.silhouettes()
 
 

@@ -115,6 +115,32 @@ def test_a_correction_changes_only_the_frames_up_to_the_neighbouring_keys():
         assert np.array_equal(seg.mask(t), after_10[t]), t
 
 
+def test_a_background_stroke_only_takes_away_and_a_subject_stroke_only_adds():
+    frames, truth = scene(14)
+    seg = RotoSegmentation(frames, box=padded_box(truth[0]))
+    seg.run()
+    before = [seg.mask(t).copy() for t in range(14)]
+    seg.correct([Scribble([[30.0, 50.0], [70.0, 50.0]], 6, 7, "background")])
+    after = [seg.mask(t).copy() for t in range(14)]
+    assert (after[7] != before[7]).any()  # the stroke took its part away
+    for t in range(14):  # and nothing came in anywhere it reached
+        assert not (after[t] & ~before[t]).any(), t
+    seg.correct([Scribble([[50.0, 50.0]], 6, 9, "subject")])
+    again = [seg.mask(t).copy() for t in range(14)]
+    for t in range(14):  # both passes keep what was there; their blend may round a corner
+        assert (after[t] & ~again[t]).sum() <= max(0.05 * after[t].sum(), 5), t
+
+
+def test_a_silhouette_that_grows_or_shrinks_suddenly_is_to_check():
+    from gaitcore.silhouettes.roto import FrameState, frames_to_check
+
+    states = [FrameState(False, t == 6, 0.95) for t in range(8)]
+    areas = np.array([100, 104, 98, 140, 139, 90, 140, 141])
+    assert frames_to_check(states) == ()
+    # 3 grew by 43%, 5 shrank by 35%; 6 grew back but carries strokes: the artist's own
+    assert frames_to_check(states, areas) == (3, 5)
+
+
 def test_where_one_pass_lost_the_subject_the_other_is_taken_whole():
     """The pass from frame 0 lost the subject on the corrected frame 10, so it is taken to
     have drifted all the way there and the pass back from 10 gets most of the frames between;
