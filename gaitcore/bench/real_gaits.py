@@ -19,6 +19,10 @@ trained network's keypoints in the video's pixels, not hand labels). The protoco
   nearest posed frame's pose (nearest in the coordinates the analysis uses), the posed
   frames' mean pose, and the oracle: the same protocol with the PCA taken on the true
   keypoints instead of the silhouettes.
+- *Stride in body lengths*: the withers' displacement over one stride from each frame, in the
+  withers-to-hip length over that stride (the horse turns a little from the camera as it
+  goes: both shorten together), averaged (:func:`per_stride`); a rig's root against it, in
+  the rig's length from shoulder blade to hip joint (:func:`rig_body_length`).
 """
 
 from __future__ import annotations
@@ -32,6 +36,7 @@ import numpy as np
 from gaitcore.analysis.analyze import Analysis, AnalysisSettings, analyze_features
 from gaitcore.animation.animate import AnalysisRecord, animate_record
 from gaitcore.errors import GaitInputError
+from gaitcore.rig.skeleton import Skeleton
 
 HORSE_JOINTS = ("Nostril", "Poll", "Withers", "RightKnee", "RightFrontFetlock", "RightFrontHoof",
                 "LeftKnee", "LeftFrontFetlock", "LeftFrontHoof", "Hip", "RightHock",
@@ -143,6 +148,37 @@ class PoseErrors:
     animation: float
     nearest_key: float
     mean_pose: float
+
+
+def per_stride(x: np.ndarray, body: np.ndarray, stride: float) -> float:
+    """Mean displacement of ``x`` over one stride from each frame, in the mean of ``body``
+    (NaN where unknown) over that stride."""
+    rows = np.arange(len(x))
+    moved = [abs(np.interp(a + stride, rows, x) - x[a])
+             / np.nanmean(body[a : int(np.ceil(a + stride)) + 1])
+             for a in range(len(x) - int(np.ceil(stride)))]
+    return float(np.mean(moved)) if moved else float("nan")
+
+
+def withers_stride(kp: Keypoints, frame_range: tuple[int, int]) -> float:
+    """The withers' displacement per stride in withers-to-hip lengths over ``frame_range``."""
+    start, stop = frame_range
+    withers, hip = kp.index("Withers"), kp.index("Hip")
+    seen = ((kp.likelihood[start:stop, withers] > TRUSTED_LIKELIHOOD)
+            & (kp.likelihood[start:stop, hip] > TRUSTED_LIKELIHOOD))
+    w_xy, h_xy = kp.xy[start:stop, withers], kp.xy[start:stop, hip]
+    body = np.where(seen, np.linalg.norm(w_xy - h_xy, axis=1), np.nan)
+    rows = np.arange(stop - start)
+    x = np.interp(rows, rows[seen], w_xy[seen, 0])
+    return per_stride(x, body, kp.stride_frames())
+
+
+def rig_body_length(skeleton: Skeleton) -> float:
+    """Side-view distance from the right shoulder blade (the withers) to the root (the hip
+    joint) of a horse rig at rest, metres."""
+    rest = skeleton.joint_positions(skeleton.rest_pose())
+    return float(np.linalg.norm(rest[skeleton.joint_index("R_scapula"), :2]
+                                - rest[skeleton.joint_index("root"), :2]))
 
 
 def ineligible_keys(kp: Keypoints) -> tuple[int, ...]:
