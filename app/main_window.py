@@ -57,6 +57,11 @@ def default_recovery_dir() -> Path:
     return Path(data) / "recovery"
 
 
+LOOP_WIDTH = 300
+"""The loop and verdict dock's width at a first start (the posing dock gets its panel's
+narrowest, every button whole); the centre, footage and rig, takes the rest."""
+
+
 class MainWindow(QMainWindow):
     """Gait Studio's window.
 
@@ -102,6 +107,8 @@ class MainWindow(QMainWindow):
         self._build_menus()
 
         self._connect_messages()
+        self._default_layout = self.saveState()
+        self._views_fitted = False
         self._set_default_sizes()
         if remember_layout:
             self._restore_layout()
@@ -157,12 +164,38 @@ class MainWindow(QMainWindow):
         self.state.sourceChanged.connect(self._update_title)
         self.documents.recentChanged.connect(self._fill_recent)
 
+    def reset_layout(self) -> None:
+        """Every panel back where a first start puts it, at its size (View > Reset layout)."""
+        self.set_large_footage(False)
+        self.restoreState(self._default_layout)
+        for dock in self.docks.values():
+            dock.show()
+        self.docks["posing"].raise_()
+        self._set_default_sizes()
+
+    def _fit_views(self) -> None:
+        """The footage takes what the rig's viewport, its bars whole, leaves of the centre
+        (once the window is shown: before, the splitter has no width yet)."""
+        rig = self.viewport.minimumSizeHint().width()
+        centre = self.views.width() - self.views.handleWidth()
+        self._views_fitted = self.isVisible() and centre > rig
+        if self._views_fitted:
+            self.views.setSizes([centre - rig, rig])
+
+    def showEvent(self, event) -> None:  # noqa: N802 - Qt API
+        super().showEvent(event)
+        if not self._views_fitted:
+            self._fit_views()
+
     def _set_default_sizes(self) -> None:
         """The layout of a first start (a remembered one replaces it)."""
         self.resize(1500, 950)
-        self.resizeDocks([self.docks["posing"], self.docks["pcs"]], [280, 330],
+        posing = max(self.pose_panel.minimumSizeHint().width(),
+                     self.eigen.minimumSizeHint().width())  # the two tabs of that dock
+        self.resizeDocks([self.docks["posing"], self.docks["pcs"]], [posing, LOOP_WIDTH],
                          Qt.Orientation.Horizontal)
-        self.views.setSizes([380, 620])  # the rig over the footage gets the larger pane
+        self.layout().activate()  # the docks at their new widths before the centre is split
+        self._fit_views()
         self.resizeDocks([self.docks["timeline"], self.docks["animation"]], [70, 170],
                          Qt.Orientation.Vertical)
         self.resizeDocks([self.docks["pcs"], self.docks["diagnosis"]], [360, 300],
@@ -241,6 +274,7 @@ class MainWindow(QMainWindow):
                                              "timeline, to draw the box and brush strokes at "
                                              "full size; again to bring the panels back")
         self.large_footage_action.toggled.connect(self.set_large_footage)
+        self._action(view, "&Reset layout", None, self.reset_layout)
         view.addSeparator()
         for dock in self.docks.values():
             view.addAction(dock.toggleViewAction())

@@ -16,7 +16,7 @@ from gaitcore.analysis.analyze import Analysis
 
 ROWS = 3
 SCALE_SD = 2.0
-THUMB_W = 96
+THUMB_W = 72
 
 
 def grey_pixmap(image: np.ndarray, width: int) -> QPixmap:

@@ -17,6 +17,7 @@ from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QColor
 from PySide6.QtWidgets import (
     QCheckBox,
+    QGridLayout,
     QHBoxLayout,
     QLabel,
     QPushButton,
@@ -81,9 +82,9 @@ class PCPlotWidget(QWidget):
         for w in (self.pcs, self.keys, self.switching):
             top.addWidget(w)
         top.addStretch(1)
-        buttons = QHBoxLayout()
-        for w in (self.pin, self.drop, self.clear, self.accept_alt):
-            buttons.addWidget(w)
+        buttons = QGridLayout()  # two by two: the dock stays narrow beside the footage
+        for i, w in enumerate((self.pin, self.drop, self.clear, self.accept_alt)):
+            buttons.addWidget(w, i // 2, i % 2)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(4, 4, 4, 4)
         layout.addLayout(top)

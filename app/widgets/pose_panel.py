@@ -15,6 +15,7 @@ from PySide6.QtWidgets import (
     QDoubleSpinBox,
     QFormLayout,
     QGridLayout,
+    QHeaderView,
     QLabel,
     QListWidget,
     QListWidgetItem,
@@ -41,6 +42,10 @@ EXPAND_ALL_JOINTS = 2_000
 show the first EXPAND_DEPTH levels."""
 EXPAND_DEPTH = 8
 
+JOINT_INDENT_PX = 12
+"""Indentation per level of the joint tree: a horse's hoof, ten levels down, keeps its name."""
+
+
 class PosePanel(QWidget):
     """Numeric posing of the current key-image, bound to :class:`AppState`."""
 
@@ -61,6 +66,10 @@ class PosePanel(QWidget):
         self.joints = QTreeWidget()
         self.joints.setHeaderHidden(True)
         self.joints.setMinimumHeight(150)
+        self.joints.setIndentation(JOINT_INDENT_PX)
+        # as wide as its longest name, scrolled rather than cut where the dock is narrower
+        self.joints.header().setSectionResizeMode(0, QHeaderView.ResizeMode.ResizeToContents)
+        self.joints.header().setStretchLastSection(False)
         self.spins: dict[str, QDoubleSpinBox] = {}
         form = QFormLayout()
         for ch in CHANNEL_ORDER[3:] + CHANNEL_ORDER[:3]:
