@@ -64,10 +64,6 @@ class ContactSettings:
         Shorter low-and-slow runs are not stances.
     max_gap_frames : int
         Stances separated by at most this many frames are one stance (interpolation jitter).
-    max_plant_m : float
-        A foot is planted only on the frames of its stance where it lies within this
-        distance (along the ground) of where it is planted: a long low run of a foot that
-        moves on with the body is not held back by a leg stretched past its reach.
 
     Raises
     ------
@@ -83,12 +79,10 @@ class ContactSettings:
     blend_frames: int = 3
     min_stance_frames: int = 3
     max_gap_frames: int = 2
-    max_plant_m: float = 0.3
 
     def __post_init__(self) -> None:
         if min(self.height_m, self.speed_ratio, self.min_speed_m, self.speed_window,
-               self.blend_frames, self.max_gap_frames, self.max_plant_m) < 0 \
-                or self.min_stance_frames < 1:
+               self.blend_frames, self.max_gap_frames) < 0 or self.min_stance_frames < 1:
             raise GaitInputError("ground contact thresholds must be zero or positive and a "
                                  "stance at least one frame long")
 
@@ -219,9 +213,12 @@ def clean_ground_contact(skeleton: Skeleton, poses: np.ndarray, *,
     index = [skeleton.joint_index(f) for f in feet]
     before = skeleton.joint_positions(p)[:, index] + travel[:, None, :]
     speed = _ground_speed(travel)
+    legs = [_leg(skeleton, f) for f in feet]
+    tops = skeleton.joint_positions(p)[:, [top for top, _ in legs]] + travel[:, None, :]
+    tops[..., 1] = skeleton.joint_positions(skeleton.rest_pose())[[t for t, _ in legs], 1]
     stance = np.stack([_within_reach(before[:, i], stance_mask(
-        before[:, i], ground, animal_speed_m=speed, settings=settings), anchored, settings)
-        for i in range(len(feet))], axis=1)
+        before[:, i], ground, animal_speed_m=speed, settings=settings), anchored,
+        tops[:, i], legs[i][1], ground, settings) for i in range(len(feet))], axis=1)
     heels = [_foot_joint(skeleton, f) for f in feet]
     heel_y = skeleton.joint_positions(p)[:, [skeleton.joint_index(h or f)
                                             for h, f in zip(heels, feet)], 1]
@@ -317,15 +314,28 @@ def _spot(foot: np.ndarray, start: int, stop: int, anchored: np.ndarray) -> np.n
     return np.array([np.median(where[:, 0]), np.median(where[:, 2])])
 
 
-def _within_reach(foot: np.ndarray, stance: np.ndarray, anchored: np.ndarray,
-                  settings: ContactSettings) -> np.ndarray:
-    """``stance`` kept on the frames where the foot lies within ``max_plant_m`` of where its
-    stance plants it (shorter runs than the minimum dropped)."""
+def _leg(skeleton: Skeleton, foot: str) -> tuple[int, float]:
+    """The top joint of ``foot``'s leg (which the leg's IK does not move) and the leg's
+    length from it to the foot, metres."""
+    top = leg_joints(skeleton, foot)[0]
+    j, reach = skeleton.joint_index(foot), 0.0
+    while j != top:
+        reach += float(np.linalg.norm(skeleton.offsets[j]))
+        j = int(skeleton.parents[j])
+    return top, reach
+
+
+def _within_reach(foot: np.ndarray, stance: np.ndarray, anchored: np.ndarray, top: np.ndarray,
+                  reach: float, ground: float, settings: ContactSettings) -> np.ndarray:
+    """``stance`` kept on the frames where the leg, from its ``top`` (world positions, travel
+    included, at the height the rig stands it), can reach where its stance plants the foot
+    (shorter runs than the minimum dropped): a long low run of a foot that moves on with the
+    body is not held back by a leg stretched past its length (a body that only rides high
+    is brought down instead)."""
     out = stance.copy()
     for start, stop in true_runs(stance):
-        off = np.linalg.norm(foot[start:stop][:, [0, 2]] - _spot(foot, start, stop, anchored),
-                             axis=1)
-        out[start:stop] = off <= settings.max_plant_m
+        x, z = _spot(foot, start, stop, anchored)
+        out[start:stop] = np.linalg.norm(top[start:stop] - [x, ground, z], axis=1) <= reach
     for start, stop in true_runs(out):
         if stop - start < settings.min_stance_frames:
             out[start:stop] = False

@@ -17,14 +17,12 @@ import numpy as np
 import pytest
 
 from app.widgets.frame_canvas import Tool
-from gaitcore.bench.real_gaits import (
-    HOOVES,
-    Keypoints,
-    per_stride,
-    rig_body_length,
-    withers_stride,
+from gaitcore.bench.real_gaits import HOOVES, Keypoints, per_stride
+from gaitcore.project.footage_fit import (
+    footage_from_world,
+    silhouette_heights_px,
+    skeleton_extent,
 )
-from gaitcore.project.footage_fit import footage_from_world, skeleton_extent
 from tests.app.conftest import wait_ready
 from tests.app.test_main_window import choose_tool, drag
 from tests.gaitcore.test_blender import PROBE, _blender_python
@@ -154,8 +152,19 @@ def test_a_horse_walk_goes_from_a_folder_to_blender_walking_on_the_ground(
     hooves = [bones.index(f"{s}_{leg}_hoof") for s in "LR" for leg in ("fore", "hind")]
     lowest = tails[:, hooves, 1].min(axis=1)  # a hoof bone ends at the toe
     assert lowest.min() > -0.005 and np.abs(lowest).max() <= 0.01, lowest
-    # Per stride the root advances by the stride the footage shows, in body lengths.
-    ours = per_stride(root_x, np.full(n, rig_body_length(window.state.skeleton)),
-                      kp.stride_frames())
-    footage = withers_stride(kp, analysis.frame_range)
+    # Per stride the root advances by the stride the footage shows: the withers' keypoint
+    # over each stride, in metres at the scale the footage is shown behind the rig on that
+    # frame. (Against the rig's own body length, the benchmark real_gaits measures it too.)
+    start, stop = analysis.frame_range
+    withers = kp.index("Withers")
+    seen = kp.likelihood[start:stop, withers] > TRUSTED
+    rows = np.arange(n)
+    withers_px = np.interp(rows, rows[seen], kp.xy[start:stop, withers, 0][seen])
+    heights = silhouette_heights_px(window.state.project.silhouettes)[start:stop]
+    metres_per_px = (skeleton_extent(window.state.skeleton).height_m
+                     * window.state.project.footage_fit.scale / heights)
+    withers_m = np.r_[0.0, np.cumsum(np.diff(withers_px) * metres_per_px[1:])]
+    stride = kp.stride_frames()
+    footage = per_stride(withers_m, np.ones(n), stride)
+    ours = per_stride(root_x, np.ones(n), stride)
     assert ours == pytest.approx(footage, rel=STRIDE_TOLERANCE), (ours, footage)
