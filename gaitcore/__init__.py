@@ -10,10 +10,14 @@ with scipy, was 0.35 s of its start).
 
 from __future__ import annotations
 
+import os
 from importlib import import_module
 from typing import TYPE_CHECKING
 
 from gaitcore.errors import GaitInputError
+from gaitcore.limits import MAX_IMAGE_PIXELS
+
+os.environ.setdefault("OPENCV_IO_MAX_IMAGE_PIXELS", str(MAX_IMAGE_PIXELS))
 
 if TYPE_CHECKING:
     from gaitcore.analysis.image_pca import ImagePCA

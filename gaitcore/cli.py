@@ -20,7 +20,7 @@ from gaitcore.errors import GaitInputError
 from gaitcore.io import segment_command
 from gaitcore.progress import Cancelled
 from gaitcore.project import batch_command, pose_command
-from gaitcore.schema import MAX_FPS
+from gaitcore.schema import MAX_FPS, check_path
 
 
 class _Parser(argparse.ArgumentParser):
@@ -393,10 +393,21 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _flag(dest: str) -> str:
+    """How the command line names argument ``dest`` (``--key-poses``, ``input``)."""
+    return dest if dest in POSITIONAL else f"--{dest.replace('_', '-')}"
+
+
+POSITIONAL = ("input", "analysis", "manifest")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the ``gaitcore`` command; returns the exit status."""
     try:
         args = build_parser().parse_args(argv)
+        for name, value in vars(args).items():
+            if isinstance(value, Path):
+                setattr(args, name, check_path(value, what=_flag(name)))
         return args.run(args)
     except GaitInputError as exc:
         print(f"gaitcore: error: {exc}", file=sys.stderr)

@@ -49,6 +49,49 @@ _MISSING = object()
 
 
 # -- files ---------------------------------------------------------------------------------
+MAX_NAME_BYTES = 255
+MAX_PATH_BYTES = 4096
+"""The longest file name and path accepted, bytes of UTF-8 (what Linux file systems take)."""
+
+
+def check_path(path: str | os.PathLike, *, what: str) -> Path:
+    """``path`` as a :class:`Path` once it is safe to hand to the file system and to the
+    libraries that open files (OpenCV, FFmpeg): UTF-8, no NUL byte, names and the whole of a
+    length a file system takes, no loop of symbolic links, and not a pipe, socket or device
+    (which would block or never end).
+
+    Raises
+    ------
+    GaitInputError
+        Naming ``what`` (``--out``, ``footage``) and what is wrong with the path.
+    """
+    text = os.fspath(path)
+    if isinstance(text, bytes):
+        text = os.fsdecode(text)
+    shown = text.encode("utf-8", "backslashreplace").decode("utf-8")
+    try:
+        raw = text.encode("utf-8")
+    except UnicodeEncodeError:
+        raise GaitInputError(f"{what} {shown}: the name holds bytes that are not UTF-8 text; "
+                             "rename it") from None
+    if b"\0" in raw:
+        raise GaitInputError(f"{what} {shown!r}: the name holds a NUL byte; give another name")
+    if len(raw) > MAX_PATH_BYTES or any(len(part) > MAX_NAME_BYTES for part in raw.split(b"/")):
+        raise GaitInputError(f"{what}: the name is too long ({len(raw)} bytes); shorten it")
+    p = Path(text)
+    try:
+        mode = p.stat().st_mode
+    except FileNotFoundError:
+        return p  # an output not yet written, or a missing input its reader names
+    except OSError as exc:
+        raise GaitInputError(f"{what} {shown}: {exc.strerror or exc} (a loop of symbolic "
+                             "links?); give another path") from None
+    if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+        raise GaitInputError(f"{what} {shown} is a pipe, socket or device, not a file or "
+                             "folder: give a file or folder")
+    return p
+
+
 def open_regular(path: str | os.PathLike, *, what: str):
     """Open ``path`` for binary reading, refusing anything that is not a regular file.
 

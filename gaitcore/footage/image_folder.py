@@ -20,6 +20,7 @@ import numpy as np
 
 from gaitcore.errors import GaitInputError
 from gaitcore.footage.threads import InOrder
+from gaitcore.limits import MAX_IMAGE_PIXELS
 
 IMAGE_SUFFIXES = frozenset(
     {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm", ".pbm", ".jp2"}
@@ -130,9 +131,24 @@ def check_size(img: np.ndarray, size: tuple[int, int] | None, what: str) -> None
         )
 
 
+def decoded(f: Path, flags: int) -> np.ndarray | None:
+    """``cv2.imread`` of ``f``, None where it cannot be decoded; an image of more pixels than
+    :data:`gaitcore.limits.MAX_IMAGE_PIXELS` is refused before it is decoded (from its
+    header for PNG and JPEG, by OpenCV's own ceiling for the others)."""
+    size = _header_size(f)
+    too_big = (f"image {f} has more than {MAX_IMAGE_PIXELS:,} pixels, more than a frame can: "
+               "is it the right file?")
+    if size is not None and size[0] * size[1] > MAX_IMAGE_PIXELS:
+        raise GaitInputError(too_big)
+    try:
+        return cv2.imread(str(f), flags)
+    except cv2.error:
+        raise GaitInputError(too_big) from None
+
+
 def read_image(f: Path, size: tuple[int, int] | None) -> np.ndarray:
     """Decode ``f`` as BGR, checking its size against ``size`` unless None."""
-    img = cv2.imread(str(f), cv2.IMREAD_COLOR)
+    img = decoded(f, cv2.IMREAD_COLOR)
     if img is None:
         raise GaitInputError(f"image {f} cannot be read: it is damaged or not an image; "
                              "replace or remove it")
@@ -141,7 +157,7 @@ def read_image(f: Path, size: tuple[int, int] | None) -> np.ndarray:
 
 
 def _read_mask(f: Path) -> np.ndarray:
-    img = cv2.imread(str(f), cv2.IMREAD_UNCHANGED)
+    img = decoded(f, cv2.IMREAD_UNCHANGED)
     if img is None:
         raise GaitInputError(f"mask {f} cannot be read: it is damaged or not an image; "
                              "replace or remove it")
@@ -158,7 +174,7 @@ def check_folder_sizes(files: list[Path], size: tuple[int, int]) -> None:
     for f in files[1:]:
         got = _header_size(f)
         if got != size:  # unusual format, or a mismatch to confirm: decode it
-            img = cv2.imread(str(f), cv2.IMREAD_UNCHANGED)
+            img = decoded(f, cv2.IMREAD_UNCHANGED)
             if img is None:
                 raise GaitInputError(f"image {f} cannot be read: it is damaged or not an image; "
                                      "replace or remove it")

@@ -32,6 +32,9 @@ MAX_VERSION = 1_000_000
 MAX_FRAMES = 10_000_000
 MAX_PCS = 64
 MAX_ANALYSIS_BYTES = 2 << 30
+MAX_COORDINATE = 1e9
+"""The largest projection or loop angle a file may hold: PCA coordinates of images stay far
+below, and squares of larger ones overflow the interpolation's arithmetic."""
 
 
 def analysis_to_dict(analysis: Analysis, *, source: str = "", fps: float | None = None) -> dict:
@@ -147,6 +150,11 @@ def analysis_record_from_dict(data: object, *, where: str = "analysis") -> Analy
     filt = doc.key("filtered_projections", doc.value["projections"]).array(
         columns=pcs, min_rows=n, max_rows=n)
     theta = doc.key("loop_angle").array(min_rows=n, max_rows=n)
+    for name, values in (("projections", proj), ("filtered_projections", filt),
+                         ("loop_angle", theta)):
+        if np.abs(values).max(initial=0.0) > MAX_COORDINATE:
+            raise doc.key(name).fail(f"numbers of at most {MAX_COORDINATE:g} in size (the "
+                                     "analysis never writes larger ones)")
     first = doc.key("first_frame", 0).integer(lo=0, hi=MAX_FRAMES)
     last = first + n - 1
     keys = doc.key("key_frames").integers(max_len=MAX_PCS * MAX_PCS, lo=first, hi=last)
@@ -158,6 +166,8 @@ def analysis_record_from_dict(data: object, *, where: str = "analysis") -> Analy
     fps = doc.key("fps", None).number(lo=0, lo_open=True, hi=MAX_FPS, optional=True)
     travel = doc.key("travel", None)
     travel = None if travel.is_null() else travel.array(min_rows=n, max_rows=n)
+    if travel is not None and np.abs(travel).max(initial=0.0) > MAX_COORDINATE:
+        raise doc.key("travel").fail(f"numbers of at most {MAX_COORDINATE:g} in size")
     if not keys:
         raise doc.key("key_frames").fail(f"a list of key frames in {first}..{last}")
     return AnalysisRecord(n, proj, filt, theta, keys, alts, alpha,

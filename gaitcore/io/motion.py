@@ -174,6 +174,12 @@ def export_motion(curves: np.ndarray, channel_names: Sequence[str], *,
         closing[0, horizontal_root_channels(names)] += stride
         poses = np.concatenate([poses, closing])
     numbered = np.arange(len(poses)) + (0 if loop else int(first_frame))
+    bad = np.flatnonzero(~np.isfinite(poses).all(axis=1))
+    if bad.size:
+        raise GaitInputError(
+            f"the animation is not a number on frame {int(numbered[bad[0]])} (and "
+            f"{bad.size - 1} more): the analysis or the key poses hold values too large to "
+            "compute with; run 'gaitcore analyze' again, and check the key poses")
     travels = mode in ("footage", "forward") and velocity.size
     return ExportMotion(numbered, poses, mode, start, contact,
                         float(velocity[0]) if travels else 0.0, source if travels else "")

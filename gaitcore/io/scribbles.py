@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from gaitcore.errors import GaitInputError
+from gaitcore.schema import read_json
 from gaitcore.silhouettes.annotations import SCRIBBLE_LABELS, Scribble
 from gaitcore.silhouettes.roto import FrameState
 
@@ -47,7 +48,7 @@ def scribbles_from_dict(data: object, *, where: str = "scribbles",
             if isinstance(frame, bool) or not isinstance(frame, int):
                 raise TypeError(f"frame {frame!r} is not a whole number")
             scribble = Scribble(points, float(width), frame, label)
-        except (KeyError, TypeError, ValueError) as exc:
+        except (KeyError, TypeError, ValueError, OverflowError) as exc:
             raise GaitInputError(f"{where}: scribble {i} is malformed ({exc}): give frame, "
                                  "label, width and points [[x, y], ...]") from None
         except GaitInputError as exc:
@@ -59,6 +60,10 @@ def scribbles_from_dict(data: object, *, where: str = "scribbles",
     return out
 
 
+MAX_SCRIBBLES_BYTES = 256 << 20
+"""The largest scribbles file read (a clip's worth of strokes is a few MiB)."""
+
+
 def read_scribbles(path: str | Path, *, n_frames: int | None = None) -> list[Scribble]:
     """Read a scribbles file (see the module docstring).
 
@@ -68,13 +73,9 @@ def read_scribbles(path: str | Path, *, n_frames: int | None = None) -> list[Scr
         Missing file, malformed JSON or content (one line saying what and where).
     """
     path = Path(path)
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise GaitInputError(f"scribbles file not found: {path}") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise GaitInputError(f"{path} is not a readable scribbles file ({exc})") from None
-    return scribbles_from_dict(data, where=str(path), n_frames=n_frames)
+    doc = read_json(path, what="scribbles file", max_bytes=MAX_SCRIBBLES_BYTES,
+                    advice="write it again, or export the strokes from the app")
+    return scribbles_from_dict(doc.value, where=str(path), n_frames=n_frames)
 
 
 def scribbles_to_dict(scribbles: Sequence[Scribble]) -> dict:

@@ -32,7 +32,7 @@ from gaitcore.errors import GaitInputError
 from gaitcore.project.document import ORIGINS, AnimationOptions, FootageFit, Project, Silhouettes
 from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
-from gaitcore.schema import MAX_FPS, JsonValue, read_json, read_npy
+from gaitcore.schema import MAX_FPS, JsonValue, check_path, read_json, read_npy
 from gaitcore.silhouettes.annotations import SCRIBBLE_LABELS, Rect, Scribble, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
 
@@ -226,11 +226,17 @@ def _footage(entry: JsonValue, p: Path) -> Path | None:
         return None
     rel = entry.key("relative", None).text(optional=True)
     absolute = entry.key("absolute", None).text(optional=True)
-    candidates = [(p.parent / rel).resolve()] if rel else []
-    candidates += [Path(absolute)] if absolute else []
-    if not candidates:
+    if not (rel or absolute):
         raise entry.fail("an object with a relative or an absolute path")
-    return next((c for c in candidates if c.exists()), candidates[0])
+    try:  # a NUL byte, a name not UTF-8, a loop of links: refused before any use
+        if rel:
+            check_path(rel, what="footage")
+        candidates = [(p.parent / rel).resolve()] if rel else []
+        candidates += [check_path(absolute, what="footage")] if absolute else []
+        return next((c for c in candidates if check_path(c, what="footage").exists()),
+                    candidates[0])
+    except (GaitInputError, OSError, RuntimeError) as exc:
+        raise entry.fail(f"a usable path ({exc})") from None
 
 
 def _rects(entry: JsonValue) -> tuple[Rect, ...]:

@@ -109,6 +109,15 @@ class Rect:
         return slice(self.y, self.y + self.h), slice(self.x, self.x + self.w)
 
 
+MAX_STROKE_POINTS = 100_000
+"""Points one stroke may hold (a stroke drawn for a minute at the screen's rate holds a few
+thousand)."""
+MAX_STROKE_WIDTH_PX = 1000.0
+"""The widest stroke, pixels (OpenCV refuses thicker lines)."""
+MAX_COORDINATE_PX = 1e6
+"""The farthest a stroke's point may lie from the frame's origin, pixels."""
+
+
 @dataclass(frozen=True, eq=False)
 class Stroke:
     """One sketched polyline, drawn white on black to stand for a part of the animal.
@@ -144,11 +153,16 @@ class Stroke:
             raise GaitInputError(
                 f"stroke points must be an array of shape (k, 2) with k >= 1, got {pts.shape}"
             )
-        if not np.isfinite(pts).all():
-            raise GaitInputError("stroke points must be finite numbers")
+        if not np.isfinite(pts).all() or np.abs(pts).max() > MAX_COORDINATE_PX:
+            raise GaitInputError(f"stroke points must be finite numbers of pixels, at most "
+                                 f"{MAX_COORDINATE_PX:g} from the origin")
+        if pts.shape[0] > MAX_STROKE_POINTS:
+            raise GaitInputError(f"a stroke holds {pts.shape[0]} points, more than the "
+                                 f"{MAX_STROKE_POINTS} one can: split it")
         width = float(self.width_px)
-        if not width > 0:
-            raise GaitInputError(f"stroke width must be positive, got {self.width_px}")
+        if not 0 < width <= MAX_STROKE_WIDTH_PX:
+            raise GaitInputError(f"stroke width must be a number of pixels in (0, "
+                                 f"{MAX_STROKE_WIDTH_PX:g}], got {self.width_px}")
         if int(self.frame) != self.frame or self.frame < 0:
             raise GaitInputError(f"stroke frame must be a non-negative integer, got {self.frame}")
         pts.flags.writeable = False

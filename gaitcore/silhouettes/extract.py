@@ -16,7 +16,12 @@ import cv2
 import numpy as np
 
 from gaitcore.errors import GaitInputError
-from gaitcore.footage.image_folder import MaskWriter, iter_mask_folder, list_image_files
+from gaitcore.footage.image_folder import (
+    MaskWriter,
+    decoded,
+    iter_mask_folder,
+    list_image_files,
+)
 from gaitcore.progress import Progress
 from gaitcore.silhouettes.annotations import Rect, Scribble
 from gaitcore.silhouettes.roto import FrameState
@@ -37,7 +42,7 @@ def is_mask_folder(path: Path) -> bool:
     if not path.is_dir():
         return False
     first = list_image_files(path)[0]
-    img = cv2.imread(str(first), cv2.IMREAD_UNCHANGED)
+    img = decoded(first, cv2.IMREAD_UNCHANGED)
     if img is None:
         raise GaitInputError(f"cannot read image {first}: the file is damaged or not an image")
     if img.ndim == 3:

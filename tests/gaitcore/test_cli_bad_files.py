@@ -130,3 +130,46 @@ def test_a_damaged_video_prints_one_line_not_the_decoder_log(shared_data, tmp_pa
                          env={k: v for k, v in os.environ.items() if not k.startswith("OPENCV_")})
     assert run.returncode == 2
     assert len(run.stderr.splitlines()) == 1, run.stderr[:500]
+
+
+def _refused(argv: list[str], capsys, says: str) -> None:
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and says in err, err
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="names of any bytes: a Linux file system")
+def test_paths_that_would_crash_block_or_loop_are_refused_in_one_line(tmp_path, capsys):
+    """A name not UTF-8 once crashed the process (exit 139); a FIFO blocked for ever; a
+    loop of links and a device are no files either."""
+    os.chdir(tmp_path)
+    _refused(["synth", "--gait", "walk", "--out", os.fsdecode(b"o\xff\xfe"), "--frames", "4"],
+             capsys, "not UTF-8")
+    os.mkfifo("fifo.json")
+    _refused(["analyze", "masks", "--out", "an", "--scribbles", "fifo.json"], capsys,
+             "pipe, socket or device")
+    os.symlink("loop_b", "loop_a")
+    os.symlink("loop_a", "loop_b")
+    _refused(["analyze", "loop_a", "--out", "an"], capsys, "symbolic links")
+    _refused(["analyze", "masks", "--out", "a" * 300], capsys, "too long")
+
+
+def test_an_image_bomb_and_huge_numbers_are_refused_before_the_arithmetic(tmp_path, capsys):
+    import cv2
+
+    folder = tmp_path / "bomb"
+    folder.mkdir()
+    cv2.imwrite(str(folder / "00000.png"), np.zeros((12_000, 9_000), np.uint8))  # 108 Mpx
+    _refused(["analyze", str(folder), "--out", str(tmp_path / "an")], capsys, "pixels")
+    huge = dict(ANALYSIS, projections=[[1e300, 0.0]] + ANALYSIS["projections"][1:])
+    (tmp_path / "huge.json").write_text(json.dumps(huge))
+    (tmp_path / "keys.csv").write_text("frame,a.rz\n1,0\n4,1\n")
+    _refused(["animate", str(tmp_path / "huge.json"), "--key-poses", str(tmp_path / "keys.csv"),
+              "--out", str(tmp_path / "c.csv")], capsys, "at most")
+    wide = {"scribbles": [{"frame": 0, "label": "subject", "width": 1e400, "points": [[1, 1]]}]}
+    (tmp_path / "wide.json").write_text(json.dumps(wide).replace("Infinity", "1e400"))
+    small = tmp_path / "small"
+    small.mkdir()
+    cv2.imwrite(str(small / "00000.png"), np.full((30, 40, 3), (20, 90, 160), np.uint8))
+    _refused(["segment", str(small), "--out", str(tmp_path / "s"), "--scribbles",
+              str(tmp_path / "wide.json")], capsys, "width")

@@ -98,3 +98,20 @@ def test_read_npy_checks_the_header_against_the_file(tmp_path):
     with pytest.raises(GaitInputError,
                        match=r"declares shape \(3, 2\) \(48 bytes\) but it holds 47"):
         read_npy(f, what="array", kind="f", ndim=2, max_bytes=1000)
+
+
+def test_a_footage_path_with_a_nul_byte_in_a_project_is_refused_in_one_line(tmp_path):
+    import json
+
+    from gaitcore.errors import GaitInputError
+    from gaitcore.project.document import Project
+    from gaitcore.project.storage import load_project, save_project
+    from gaitcore.schema import check_path
+
+    save_project(Project(), tmp_path / "p.gaitproj")
+    doc = json.loads((tmp_path / "p.gaitproj").read_text())
+    doc["footage"] = {"relative": "clip\u0000.mp4", "absolute": None}
+    (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
+    with pytest.raises(GaitInputError, match="NUL byte"):
+        load_project(tmp_path / "p.gaitproj")
+    assert check_path(tmp_path / "new.csv", what="--out") == tmp_path / "new.csv"
