@@ -102,7 +102,14 @@ def write_analysis_json(path: str | Path, analysis: Analysis, *, source: str = "
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(analysis_to_dict(analysis, source=source, fps=fps), indent=1))
+    try:  # JSON has no NaN: a number that is not one is refused, never written
+        text = json.dumps(analysis_to_dict(analysis, source=source, fps=fps), indent=1,
+                          allow_nan=False)
+    except ValueError:
+        raise GaitInputError("the analysis holds a value that is not a number, so "
+                             f"{path} was not written: check the silhouettes, or report it "
+                             "with the clip") from None
+    tmp.write_text(text)
     tmp.replace(path)
 
 

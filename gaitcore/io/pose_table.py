@@ -40,11 +40,28 @@ class PoseTable:
     columns : tuple of str
         Channel names, k of them (the ``frame`` column excluded).
     values : ndarray of shape (r, k), float
+
+    Raises
+    ------
+    GaitInputError
+        A value that is not a finite number (it would leave the product in a curves file,
+        a BVH or a glTF): the message names its frame and column.
     """
 
     frames: np.ndarray
     columns: tuple[str, ...]
     values: np.ndarray
+
+    def __post_init__(self) -> None:
+        values = np.asarray(self.values, dtype=float)
+        bad = np.argwhere(~np.isfinite(values))
+        if bad.size:
+            row, col = (int(v) for v in bad[0])
+            name = self.columns[col] if col < len(self.columns) else f"column {col + 1}"
+            raise GaitInputError(
+                f"the motion is not a number on frame {int(np.asarray(self.frames)[row])}, "
+                f"{name} ({len(bad)} value(s) in all): nothing was written; check the key "
+                "poses and the analysis it came from")
 
     def as_dict(self) -> dict[int, np.ndarray]:
         """Pose vector of each frame."""

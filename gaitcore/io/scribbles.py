@@ -107,5 +107,5 @@ def write_segmentation_json(path: str | Path, states: Sequence[FrameState], *,
 def _write_json(path: Path, data: dict) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(data, indent=1), encoding="utf-8")
+    tmp.write_text(json.dumps(data, indent=1, allow_nan=False), encoding="utf-8")
     tmp.replace(path)

@@ -35,7 +35,7 @@ from gaitcore.project.batch import (
     remove_partial_folders,
     write_summary,
 )
-from gaitcore.project.manifest import ClipSpec, Manifest
+from gaitcore.project.manifest import LOCK_NAME, ClipSpec, Manifest
 
 SUMMARY_EVERY_S = 1.0
 """Shortest interval between two rewrites of the summary while results arrive."""
@@ -99,12 +99,38 @@ def run_batch(manifest: Manifest, out_dir: Path, *, scheduler: str | None = None
     Cancelled, KeyboardInterrupt
         The summary is written first, with the clips not finished marked ``pending``.
     """
-    out_dir = Path(out_dir)
+    out_dir = Path(out_dir).absolute()  # a remote worker has a working folder of its own
     say = notify or (lambda line: None)
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise GaitInputError(f"cannot create the output folder {out_dir}: {exc.strerror}") from None
+    with batch_lock(out_dir):
+        return _run_locked(manifest, out_dir, scheduler, workers, settings, progress, say)
+
+
+@contextmanager
+def batch_lock(out_dir: Path) -> Iterator[None]:
+    """Hold ``out_dir``'s lock for one batch (the system lets it go when the process ends,
+    however it ends); a second batch into the same folder is refused, saying so."""
+    import fcntl
+
+    fd = os.open(out_dir / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise GaitInputError(f"another batch is writing to {out_dir}: wait for it to "
+                                 "finish, or choose another --out") from None
+        yield
+    finally:
+        os.close(fd)
+
+
+def _run_locked(manifest: Manifest, out_dir: Path, scheduler: str | None, workers: int | None,
+                settings: AnalysisSettings, progress: Progress | None,
+                say: Callable[[str], None]) -> BatchResult:
+    """:func:`run_batch` once the output folder is locked."""
     remove_partial_folders(out_dir)
     rows = {spec.clip: finished_result(out_dir, spec) or pending(spec) for spec in manifest.clips}
     todo = [spec for spec in manifest.clips if rows[spec.clip].status == "pending"]

@@ -224,19 +224,31 @@ def _fps(text: str) -> float | None:
     return value
 
 
+LOCK_NAME = "batch.lock"
+"""The file a running batch holds locked in its output folder."""
+RESERVED_IDS = ("summary.csv", "summary.json", LOCK_NAME)
+"""Names the batch gives its own files in the output folder: no clip folder may take them."""
+MAX_ID_CHARS = 200
+"""The longest clip id (a folder name, with room for the batch's suffixes)."""
+
+
 def _clip_id(given: str, clip_path: Path, base: Path) -> str:
     if given:
-        if not _SAFE_ID.match(given):
-            raise GaitInputError(f"clip id {given!r} cannot name a folder: use letters, digits, "
-                                 "and . _ - + @ (not first)")
+        if not _SAFE_ID.match(given) or len(given) > MAX_ID_CHARS:
+            raise GaitInputError(f"clip id {given[:40]!r} cannot name a folder: use up to "
+                                 f"{MAX_ID_CHARS} letters, digits, and . _ - + @ (not first)")
+        if given.lower() in RESERVED_IDS:
+            raise GaitInputError(f"clip id {given!r} is the name of the batch's own file: "
+                                 "choose another")
         return given
     try:
         rel = clip_path.absolute().relative_to(base.absolute())
     except ValueError:
         rel = Path(clip_path.name)
     stem = rel.with_suffix("") if rel.suffix and not clip_path.is_dir() else rel
-    text = re.sub(r"[^A-Za-z0-9_.@+-]+", "-", stem.as_posix()).strip("-.")
-    return text or "clip"
+    text = re.sub(r"[^A-Za-z0-9_.@+-]+", "-", stem.as_posix()).strip("-.")[-MAX_ID_CHARS:]
+    text = text.strip("-.") or "clip"
+    return f"{text}-clip" if text.lower() in RESERVED_IDS else text
 
 
 def spec_from_dict(d: dict) -> ClipSpec:

@@ -198,3 +198,27 @@ def test_worker_count_and_an_unreachable_scheduler_are_one_line_errors(masks, tm
     err = capsys.readouterr().err.strip()
     assert err.splitlines()[-1].startswith("gaitcore: error: cannot reach the Dask scheduler")
     assert "Traceback" not in err
+
+
+def test_clip_ids_never_take_the_batch_s_own_files_or_too_long_a_name(masks):
+    long_id = "x" * 300
+    path = _manifest(masks.parent, f"clip,path\nsummary.json,walker\n{long_id},walker\n"
+                     "fine,walker\n")
+    m = read_manifest(path)
+    assert [c.clip for c in m.clips] == ["fine"]
+    said = " ".join(p.message for p in m.problems)
+    assert "the batch's own file" in said and "cannot name a folder" in said
+    (masks.parent / "summary.json").mkdir(exist_ok=True)  # a clip folder named so by its path
+    derived = read_manifest(_manifest(masks.parent, "clip,path\n,summary.json\n"))
+    assert [c.clip for c in derived.clips] == ["summary.json-clip"]
+
+
+def test_a_second_batch_into_the_same_folder_is_refused_while_the_first_holds_it(tmp_path):
+    from gaitcore.project.batch_run import batch_lock
+
+    with batch_lock(tmp_path):
+        with pytest.raises(GaitInputError, match="another batch is writing"):
+            with batch_lock(tmp_path):
+                pass
+    with batch_lock(tmp_path):  # let go when the first ended
+        pass

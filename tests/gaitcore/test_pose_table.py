@@ -38,3 +38,11 @@ def test_bad_files(tmp_path, text, message):
 def test_missing_file(tmp_path):
     with pytest.raises(GaitInputError, match="not found"):
         read_pose_table(tmp_path / "nope.csv")
+
+
+def test_a_motion_that_is_not_a_number_is_never_written(tmp_path):
+    from gaitcore.errors import GaitInputError
+    from gaitcore.io.pose_table import PoseTable
+
+    with pytest.raises(GaitInputError, match="frame 12, b.rz"):
+        PoseTable(np.array([11, 12]), ("a.rz", "b.rz"), np.array([[0.0, 1.0], [2.0, np.inf]]))
