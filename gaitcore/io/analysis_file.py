@@ -38,8 +38,7 @@ below, and squares of larger ones overflow the interpolation's arithmetic."""
 
 
 def analysis_to_dict(analysis: Analysis, *, source: str = "", fps: float | None = None) -> dict:
-    """The JSON-ready content of ``analysis.json`` (the contract in README.md, The gaitcore
-    command)."""
+    """The JSON-ready content of ``analysis.json`` (the contract in docs/command.md)."""
     d = analysis.diagnosis
     s = analysis.settings
     pcs = s.pcs

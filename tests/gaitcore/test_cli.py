@@ -1,4 +1,4 @@
-"""The gaitcore command: the contracts in README.md and one-line errors with exit status 2."""
+"""The gaitcore command: the contracts in docs/command.md and one-line errors with exit status 2."""
 
 import json
 import subprocess

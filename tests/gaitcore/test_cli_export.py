@@ -69,7 +69,7 @@ def test_animate_exports_bvh_and_glb(canter, tmp_path):
                  "--out", str(out), "--bvh", str(tmp_path / "a.bvh"),
                  "--glb", str(tmp_path / "a.glb"), "--skeleton", str(canter["skeleton"]),
                  "--fps", "30", "--root", "as-keys", "--no-ground-contact"]) == 0
-    # The contract of the README: CURVES.csv has exactly the columns of KEYS.csv.
+    # The contract of docs/command.md: CURVES.csv has exactly the columns of KEYS.csv.
     header = out.read_text().splitlines()[0]
     assert header == canter["key_poses"].read_text().splitlines()[0]
     curves = read_pose_table(out)
