@@ -292,9 +292,8 @@ class RotoSegmentation:
 
         Each stroked frame is cut again with all its strokes as hard labels, starting from its
         current mask; the change travels forward and backward up to the neighbouring key
-        frames. Strokes of one kind on a frame change the frames they reach one way only:
-        background strokes take subject away and add none (a blob of ground does not come
-        in where the rider goes out), subject strokes add and take none away.
+        frames. Background strokes alone on a frame only take subject away from the frames
+        they reach and add none (a blob of ground does not come in where the rider goes out).
 
         Returns
         -------
@@ -306,11 +305,12 @@ class RotoSegmentation:
         for k in sorted({sc.frame for sc in scribbles}):
             labels = {sc.label for sc in scribbles if sc.frame == k}
             reach = self._reach(k)
-            before = {t: self._final(t).mask for t in reach} if len(labels) == 1 else {}
+            before = ({t: self._final(t).mask for t in reach} if labels == {"background"}
+                      else {})
             self.keys[k] = self._key_cut(k, self._final(k).mask.astype(np.float32))
             first, stop = self._repropagate(k, progress)
             if before:
-                self._one_way(before, subject=labels == {"subject"})
+                self._taken_only(before)
             lo, hi = min(lo, first), max(hi, stop)
         return lo, hi
 
@@ -321,16 +321,16 @@ class RotoSegmentation:
         nxt = min([f for f in self.keys if f > k], default=self.n)
         return range(prev + 1, nxt)
 
-    def _one_way(self, before: dict[int, np.ndarray], *, subject: bool) -> None:
-        """Each frame of ``before`` (its mask before a correction) only gains subject
-        (``subject``) or only loses it: its key cut or both passes' cuts bounded by it."""
+    def _taken_only(self, before: dict[int, np.ndarray]) -> None:
+        """Each frame of ``before`` (its mask before a background correction) only loses
+        subject: its key cut or both passes' cuts bounded by it."""
         for t, mask in before.items():
             stores = ((self.keys,) if t in self.keys else ()) + (self.fwd, self.bwd)
             for store in stores:
                 cut = store.get(t)
                 if cut is None:
                     continue
-                bounded = (cut.mask | mask) if subject else (cut.mask & mask)
+                bounded = cut.mask & mask
                 if not np.array_equal(bounded, cut.mask):
                     bounded_cut = Cut(bounded.astype(np.uint8), cut.confidence)
                     if store is self.keys:

@@ -115,7 +115,7 @@ def test_a_correction_changes_only_the_frames_up_to_the_neighbouring_keys():
         assert np.array_equal(seg.mask(t), after_10[t]), t
 
 
-def test_a_background_stroke_only_takes_away_and_a_subject_stroke_only_adds():
+def test_a_background_stroke_only_takes_away():
     frames, truth = scene(14)
     seg = RotoSegmentation(frames, box=padded_box(truth[0]))
     seg.run()
@@ -125,10 +125,6 @@ def test_a_background_stroke_only_takes_away_and_a_subject_stroke_only_adds():
     assert (after[7] != before[7]).any()  # the stroke took its part away
     for t in range(14):  # and nothing came in anywhere it reached
         assert not (after[t] & ~before[t]).any(), t
-    seg.correct([Scribble([[50.0, 50.0]], 6, 9, "subject")])
-    again = [seg.mask(t).copy() for t in range(14)]
-    for t in range(14):  # both passes keep what was there; their blend may round a corner
-        assert (after[t] & ~again[t]).sum() <= max(0.05 * after[t].sum(), 5), t
 
 
 def test_a_silhouette_that_grows_or_shrinks_suddenly_is_to_check():
