@@ -351,6 +351,12 @@ def _add_evaluate(sub) -> None:
 
 def _run_evaluate(args: argparse.Namespace) -> int:
     from gaitcore.bench.evaluate import BenchSettings, evaluate_gait
+    from gaitcore.bench.synth_command import MAX_FRAMES, MAX_SIDE_PX
+
+    for name, hi in (("frames", MAX_FRAMES), ("width", MAX_SIDE_PX), ("height", MAX_SIDE_PX)):
+        value = getattr(args, name)
+        if not 8 <= value <= hi:
+            raise GaitInputError(f"--{name} must be from 8 to {hi}, got {value}")
 
     settings = BenchSettings(
         gait=args.gait, n_frames=args.frames, width=args.width, height=args.height,

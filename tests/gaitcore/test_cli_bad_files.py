@@ -152,6 +152,8 @@ def test_paths_that_would_crash_block_or_loop_are_refused_in_one_line(tmp_path, 
     os.symlink("loop_a", "loop_b")
     _refused(["analyze", "loop_a", "--out", "an"], capsys, "symbolic links")
     _refused(["analyze", "masks", "--out", "a" * 300], capsys, "too long")
+    _refused(["evaluate", "--gait", "walk", "--height", "9007199254740993"], capsys,
+             "--height must be")
 
 
 def test_an_image_bomb_and_huge_numbers_are_refused_before_the_arithmetic(tmp_path, capsys):
