@@ -117,8 +117,8 @@ class ScriptedRun:
 
     def lowered(self, by: float = LOWERED_BY) -> int:
         """How many strokes lowered the clip's mean IoU by more than ``by``: corrections that
-        left the artist further from the animal than before (on the 50 DAVIS clips of
-        ``docs/segmentation.md``, 25 of 337 strokes, 2026-12-02)."""
+        left the artist further from the animal than before (counted over the DAVIS clips in
+        ``docs/segmentation.md``)."""
         means = self.ious.mean(axis=1)
         return int(np.count_nonzero(np.diff(means) < -by))
 

@@ -204,14 +204,9 @@ class PropagationSettings:
         out (:mod:`gaitcore.silhouettes.saliency`).
     saliency_every : int
         A pass runs the network every this many frames and carries its map by the flow
-        between. Over fifteen DAVIS animal clips from the box (and after one scripted stroke
-        per 10 frames), every 6th frame read 0.792 (0.797), every 4th 0.809 (0.833), every
-        3rd 0.799 (0.816); on 300 frames of 854x480, 7.5, 9.4 and 10.9 s (the network in
-        bfloat16; with the first frame's map in float32, every 4th reads 0.814 (0.824)).
-        On 2026-12-02, every frame read better from the box (the fifteen 0.810 against
-        0.796; bear, dog and goat 0.954 / 0.918 / 0.8495) but about the same after the
-        strokes (0.836 against 0.833; 50 DAVIS clips 0.787 against 0.791), in 1.7 times as
-        long (11.7-12.6 s against 7.2-7.3 s).
+        between: every 4th frame cut best for its time over the DAVIS animals; every frame
+        cuts a little better from a box alone, about the same once corrected, in 1.7 times as
+        long (the measures: ``docs/segmentation.md``).
     correction_weight : float
         The log-odds a propagated frame adds where a correction turned the mask to the
         subject on its key frame, carried there by the flow (see :func:`fuse_cut`).

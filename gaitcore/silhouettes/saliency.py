@@ -37,19 +37,12 @@ MODEL_NAME = "u2netp.onnx"
 MODEL_MD5 = "8e83ca70e441ab06c318d82300c84806"
 """The digest rembg publishes for ``u2netp.onnx``."""
 INPUT_SIDE = 320
-"""The network's input for the first frame's cut: 320 x 320, as it was trained (at 256 its
-first-frame maps read 0.01 to 0.02 IoU lower, at 160 far lower)."""
+"""The network's input for the first frame's cut: 320 x 320, as it was trained (smaller
+inputs cut the first frame less well)."""
 FAST_SIDE = 256
 """Its input for the propagated frames' cue (the subject is about 200 pixels long at the working
-size, its window about 330): 0.64 times the work of 320. Over 28 DAVIS clips with the scripted
-user (2026-11-28 evening) it read as 320 did within their noise: bear, dog, goat 0.952 / 0.894 /
-0.843 from the box (320: 0.955 / 0.888 / 0.842), the 25 others 0.674 and 0.746 after the strokes
-(0.665 and 0.733); clips on the edge tip either way (camel 0.784 -> 0.864 from the box,
-horsejump-low 0.662 -> 0.623, dog-agility after the strokes 0.590 -> 0.507). At 224 the goat read
-0.837. Tried and left out: the window's own proportions kept (256 along its longer side, a
-multiple of 32 across; the network 0.76 of the square's time on bear) read the three alike but the
-seven DAVIS training animals 0.742 from the box (square: 0.763), and a network quantised to 8
-bits (NNCF, 0.57 of bfloat16's time) read the dog 0.766 and the goat 0.750 from the box."""
+size): about two thirds of the work of :data:`INPUT_SIDE` for the same cuts within a run's noise
+(the measures and what was tried: ``docs/segmentation.md``)."""
 _MEAN = np.array([0.485, 0.456, 0.406], np.float32)
 _STD = np.array([0.229, 0.224, 0.225], np.float32)
 _FLOOR = 0.02
@@ -92,12 +85,10 @@ class Saliency:
     """The network, loaded once; call it on a BGR picture (any size) for a float32 map of the
     same size in [0, 1], stretched so its least and most salient pixels read 0 and 1.
 
-    OpenVINO runs it in bfloat16 where the processor has it (58 ms a 320 x 320 window, 108 ms
-    in float32, on the 2-core machine of 2026-11-28 morning; 125 and 213 ms on that evening's,
-    which runs the propagated frames' :data:`FAST_SIDE` windows in 74 to 84 ms): fast enough
-    for the cue of the propagated frames. The first frame's
-    cut (:meth:`in_box`, once a clip) runs it in float32: over 28 DAVIS clips its cut read
-    0.807 IoU against 0.787 in bfloat16 (drift-chicane's small car 0.351 against 0.053).
+    OpenVINO runs it in bfloat16 where the processor has it, about twice as fast as in float32:
+    fast enough for the cue of the propagated frames. The first frame's cut (:meth:`in_box`,
+    once a clip) runs it in float32, which cuts small subjects better there (the timings and
+    scores: ``docs/segmentation.md``).
     That model is compiled for the call and let go after it: kept, it held 135 MB through the
     whole clip. Both are compiled once a machine (:func:`compiled_cache`)."""
 
