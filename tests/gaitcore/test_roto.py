@@ -434,7 +434,7 @@ def test_scribbles_round_trip(tmp_path):
     write_scribbles(tmp_path / "s.json", sc)
     assert read_scribbles(tmp_path / "s.json") == sc
     (tmp_path / "bad.json").write_text("{not json")
-    with pytest.raises(GaitInputError, match="not a readable scribbles file"):
+    with pytest.raises(GaitInputError, match="scribbles file .* is not valid JSON"):
         read_scribbles(tmp_path / "bad.json")
 
 
@@ -573,7 +573,7 @@ def test_segment_command_starts_from_strokes_on_the_first_frame(tmp_path):
      '"points": [[40, 50]]}]}', "frame 40"),
     (["--scribbles", "SCRIBBLES"], '{"scribbles": [{"frame": 1, "label": "leg", '
      '"points": [[40, 50]]}]}', "label 'leg'"),
-    (["--scribbles", "SCRIBBLES"], '{"scribbles": [', "not a readable scribbles file"),
+    (["--scribbles", "SCRIBBLES"], '{"scribbles": [', "is not valid JSON"),
     ([], "", "give a --box"),
     (["--scribbles", "SCRIBBLES"], '{"scribbles": [{"frame": 1, "label": "subject", '
      '"points": [[40, 50]]}]}', "a subject stroke on it"),
