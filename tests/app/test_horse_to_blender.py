@@ -16,7 +16,6 @@ import cv2
 import numpy as np
 import pytest
 
-from app.widgets.frame_canvas import Tool
 from gaitcore.bench.real_gaits import HOOVES, Keypoints, per_stride
 from gaitcore.project.footage_fit import (
     footage_from_world,
@@ -24,7 +23,7 @@ from gaitcore.project.footage_fit import (
     skeleton_extent,
 )
 from tests.app.conftest import wait_ready
-from tests.app.test_main_window import choose_tool, drag
+from tests.app.test_real_gait import usable_from_box
 from tests.gaitcore.test_blender import PROBE, _blender_python
 
 pytestmark = [pytest.mark.slow, pytest.mark.gl]
@@ -104,17 +103,7 @@ def test_a_horse_walk_goes_from_a_folder_to_blender_walking_on_the_ground(
     assert window.open_path(folder)
     wait_ready(qtbot, window)
     assert window.state.project.fps == FPS and any("frame rate" in a for a in asker.asked)
-    x, y, w, h = kp.box(size)
-    choose_tool(window, Tool.BOX)
-    drag(qtbot, window, [(x, y), (x + w // 2, y + h // 2), (x + w, y + h)])
-    job = window.tools.segment()
-    with qtbot.waitSignal(job.succeeded, timeout=300_000):
-        pass
-    qtbot.waitUntil(lambda: window.state.analysis is not None, timeout=120_000)
-    wait_ready(qtbot, window, 120_000)
-    analysis = window.state.analysis
-    assert analysis.diagnosis.verdict.value == "usable", analysis.diagnosis.reason
-    assert window.state.project.footage_fit.flip  # walking left: faced without a Flip click
+    analysis = usable_from_box(qtbot, window, kp.box(size))
     # Fit rig on the first key whose fit is not refused (a refusal says why, as an error).
     for key in analysis.key_frames:
         window.state.set_frame(key)

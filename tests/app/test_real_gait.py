@@ -14,6 +14,23 @@ from tests.app.conftest import wait_ready
 from tests.app.test_main_window import choose_tool, drag
 
 
+def usable_from_box(qtbot, window, box_xywh: tuple[int, int, int, int]):
+    """Draw the box, segment, wait for the analysis; it is usable and the rig faces the way
+    the horse walks (to the left). Returns the analysis."""
+    x, y, w, h = box_xywh
+    choose_tool(window, Tool.BOX)
+    drag(qtbot, window, [(x, y), (x + w // 2, y + h // 2), (x + w, y + h)])
+    job = window.tools.segment()
+    with qtbot.waitSignal(job.succeeded, timeout=300_000):
+        pass
+    qtbot.waitUntil(lambda: window.state.analysis is not None, timeout=120_000)
+    wait_ready(qtbot, window, 120_000)
+    analysis = window.state.analysis
+    assert analysis.diagnosis.verdict.value == "usable", analysis.diagnosis.reason
+    assert window.state.project.footage_fit.flip  # walking left: faced without a Flip click
+    return analysis
+
+
 @pytest.mark.slow
 def test_a_horse_walk_from_one_box_is_usable_and_shows_what_was_left_out(
         qtbot, window, shared_data, artifacts_dir):
@@ -24,21 +41,12 @@ def test_a_horse_walk_from_one_box_is_usable_and_shows_what_was_left_out(
     cap = cv2.VideoCapture(str(video))
     size = int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT))
     cap.release()
-    x, y, w, h = Keypoints.read(clip / "joints.csv").box(size)
+    box_xywh = Keypoints.read(clip / "joints.csv").box(size)
     assert window.open_path(video)
     wait_ready(qtbot, window)
-    choose_tool(window, Tool.BOX)
-    drag(qtbot, window, [(x, y), (x + w // 2, y + h // 2), (x + w, y + h)])
+    analysis = usable_from_box(qtbot, window, box_xywh)
     box = window.state.project.box
-    assert box is not None and abs(box.w - w) <= 0.02 * w
-    job = window.tools.segment()
-    with qtbot.waitSignal(job.succeeded, timeout=180_000):
-        pass
-    qtbot.waitUntil(lambda: window.state.analysis is not None, timeout=60_000)
-    wait_ready(qtbot, window, 60_000)
-    analysis = window.state.analysis
-    assert analysis.diagnosis.verdict.value == "usable", analysis.diagnosis.reason
-    assert window.state.project.footage_fit.flip  # the horse walks left: the rig faces it
+    assert box is not None and abs(box.w - box_xywh[2]) <= 0.02 * box_xywh[2]
     # The horse enters and leaves the view: those frames are left out, and marked.
     left_out = window.timeline.left_out()
     assert left_out and left_out[0] < 5 and left_out[-1] > 50
