@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import time
 from dataclasses import dataclass
@@ -64,27 +65,44 @@ class RecoveryCopy:
 def find_recovery_copies(directory: Path) -> list[RecoveryCopy]:
     """Copies in ``directory`` whose session is gone, newest first.
 
-    A copy whose info file is empty or damaged (a crash while it was written by an older
-    version) is still offered, as an unsaved project from the time of the copy: only an
-    info file without its project is deleted.
+    Every project copy is offered, with or without its info file: a session killed between
+    the copy and its info (or whose info is damaged) is offered as an unsaved project from the
+    time of the copy. What a gone session leaves that is no copy (an info file without its
+    project, a temporary file of a write cut short) is deleted.
     """
     if not directory.is_dir():
         return []
     found = []
-    for meta in directory.glob("*.json"):
-        lock = QLockFile(str(meta.with_suffix(".lock")))
-        if not lock.tryLock(0):
-            continue  # another running Gait Studio owns it
-        lock.unlock()
-        project_file = meta.with_suffix(SUFFIX)
-        if not project_file.is_file():
-            meta.unlink(missing_ok=True)
-            continue
-        original, saved_at = _read_info(meta)
-        found.append(RecoveryCopy(project_file, original,
-                                  saved_at if saved_at is not None
-                                  else project_file.stat().st_mtime))
+    for entry in sorted(directory.iterdir()):
+        session = _session_of(entry)
+        if session is None or _alive(directory / f"{session}.lock"):
+            continue  # not ours, or another running Gait Studio owns it
+        project_file = directory / f"{session}{SUFFIX}"
+        if entry == project_file and entry.is_file():
+            original, saved_at = _read_info(directory / f"{session}.json")
+            found.append(RecoveryCopy(project_file, original,
+                                      saved_at if saved_at is not None
+                                      else project_file.stat().st_mtime))
+        elif entry.name.endswith(".tmp") or (entry.suffix == ".json"
+                                             and not project_file.is_file()):
+            entry.unlink(missing_ok=True)
     return sorted(found, key=lambda c: -c.saved_at)
+
+
+def _session_of(entry: Path) -> str | None:
+    """The autosave session a file of the recovery folder belongs to (None: not one of its
+    files): ``session-<pid>-<ms>`` of its copy, info file, lock, or temporary file."""
+    match = re.match(r"^\.?(session-\d+-\d+)[.]", entry.name)
+    return match.group(1) if match else None
+
+
+def _alive(lock_path: Path) -> bool:
+    """True while the session of ``lock_path`` runs (its lock is held)."""
+    lock = QLockFile(str(lock_path))
+    if not lock.tryLock(0):
+        return True
+    lock.unlock()
+    return False
 
 
 def _read_info(meta: Path) -> tuple[Path | None, float | None]:

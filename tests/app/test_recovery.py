@@ -112,3 +112,19 @@ def test_an_info_file_without_its_project_is_removed(tmp_path):
     (tmp_path / "session-1-2.json").write_text('{"original": null, "saved_at": 1}')
     assert find_recovery_copies(tmp_path) == []
     assert not (tmp_path / "session-1-2.json").exists()
+
+
+def test_a_copy_without_its_info_is_offered_and_leftovers_are_cleaned(tmp_path):
+    """Killed between the copy and its info: the complete copy is still offered; the
+    temporary file of a write cut short goes."""
+    from gaitcore.project.document import Project
+    from gaitcore.project.storage import save_project
+
+    save_project(Project(), tmp_path / "session-7-9.gaitproj")
+    stale = tmp_path / ".session-7-9.json.7.tmp"
+    stale.write_text("{")
+    (tmp_path / "notes.txt").write_text("not ours")
+    copies = find_recovery_copies(tmp_path)
+    assert [c.project_file.name for c in copies] == ["session-7-9.gaitproj"]
+    assert copies[0].original is None
+    assert not stale.exists() and (tmp_path / "notes.txt").exists()
