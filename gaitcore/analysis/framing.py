@@ -209,16 +209,12 @@ def height_trend(roi: RoiClip) -> np.ndarray | None:
 
 
 def view_travel(roi: RoiClip) -> float:
-    """The animal's net progress across the view over the clip, in its own heights (as
-    :attr:`Framing.travel`; positive to the right, 0 with fewer than three silhouettes)."""
-    kept = _whole(roi)
-    if kept.size < 3:
-        return 0.0
-    window = longest_period(kept.size)
-    trend = _log_height_trend(roi.crops, kept, window)
-    x = slow_trend(np.interp(np.arange(len(trend)), kept, roi.centers_xy[kept, 0]), window)
-    travel = _travel(x * roi.scale, np.exp(trend))
-    return float(travel[kept[-1]] - travel[kept[0]])
+    """The animal's net progress across the view over the frames :func:`frame_silhouettes`
+    keeps, in its own heights (:attr:`Framing.travel`; positive to the right, 0 with fewer
+    than three kept)."""
+    framed, framing = frame_silhouettes(roi, scale=False)
+    kept = np.flatnonzero(~framed.lost)
+    return float(framing.travel[kept[-1]] - framing.travel[kept[0]]) if kept.size >= 3 else 0.0
 
 
 def _whole(roi: RoiClip) -> np.ndarray:

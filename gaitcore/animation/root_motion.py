@@ -74,6 +74,12 @@ def key_velocity(key_poses: Mapping[int, np.ndarray], channels: np.ndarray) -> n
     return centred @ (positions - positions.mean(axis=0)) / (centred @ centred)
 
 
+def mean_speed(path: np.ndarray) -> float:
+    """The least-squares slope of a progress ``path`` (metres on each frame): its mean speed,
+    metres per frame."""
+    return float(np.polyfit(np.arange(len(path), dtype=float), np.asarray(path, float), 1)[0])
+
+
 def apply_root_motion(curves: np.ndarray, channel_names: Sequence[str], mode: str, *,
                       key_poses: Mapping[int, np.ndarray], frames: np.ndarray | None = None,
                       velocity: np.ndarray | None = None, path: np.ndarray | None = None,

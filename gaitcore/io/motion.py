@@ -29,6 +29,7 @@ from gaitcore.animation.root_motion import (
     apply_root_motion,
     horizontal_root_channels,
     key_velocity,
+    mean_speed,
 )
 from gaitcore.animation.weights import loop_cycle
 from gaitcore.errors import GaitInputError
@@ -205,8 +206,7 @@ def root_velocity(names: Sequence[str], key_poses: Mapping[int, np.ndarray], *,
         velocity[0] = float(speed_m)
         return velocity, "given"
     if travel_m is not None and len(travel_m) >= 2:
-        rows = np.arange(len(travel_m), dtype=float)
-        velocity[0] = float(np.polyfit(rows, np.asarray(travel_m, float), 1)[0])
+        velocity[0] = mean_speed(travel_m)
         return velocity, "footage"
     if len(key_poses) >= 2:
         return key_velocity(key_poses, channels), "keys"

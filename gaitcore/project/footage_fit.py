@@ -81,14 +81,9 @@ def skeleton_extent(skeleton: Skeleton) -> SkeletonExtent:
                               float(max(hi[1] - lo[1], 0.5)), float(max(hi[2], -lo[2], 0.1)),
                               float(max(hi[0] - lo[0], 0.5)),
                               ((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2))
-    centres, extents, areas = [], [], []
-    for b in bones:
-        rot = world[b.joint, :3, :3]
-        centres.append(rot @ b.center + world[b.joint, :3, 3])
-        semi = rot @ (b.axes * b.radii)  # world semi-axes as columns
-        extents.append(np.sqrt((semi ** 2).sum(axis=1)))
-        areas.append(b.radii[0] * b.radii[1])
-    c, e, a = np.array(centres), np.array(extents), np.array(areas)
+    boxes = [b.world_box(world) for b in bones]
+    c, e = np.array([centre for centre, _ in boxes]), np.array([half for _, half in boxes])
+    a = np.array([b.radii[0] * b.radii[1] for b in bones])
     centre = (a[:, None] * c).sum(axis=0) / a.sum()
     top, bottom = (c[:, 1] + e[:, 1]).max(), (c[:, 1] - e[:, 1]).min()
     depth = float(np.abs(np.r_[c[:, 2] + e[:, 2], c[:, 2] - e[:, 2]]).max())

@@ -20,6 +20,7 @@ import numpy as np
 from gaitcore.analysis.alternates import swap_warning
 from gaitcore.analysis.analyze import Analysis, AnalysisSettings, analyze_silhouettes, rekey
 from gaitcore.animation.animate import AnalysisRecord, animate_record
+from gaitcore.animation.root_motion import mean_speed
 from gaitcore.animation.weights import InterpolationWeights, interpolation_weights, loop_cycle
 from gaitcore.errors import GaitInputError
 from gaitcore.footage.image_folder import iter_mask_folder
@@ -380,7 +381,7 @@ def footage_speed(project: Project, analysis: Analysis | None, skeleton: Skeleto
                                                           project.footage_fit)
     if travel is None or len(travel) < 2:
         return None
-    per_frame = float(np.polyfit(np.arange(len(travel), dtype=float), travel, 1)[0])
+    per_frame = mean_speed(travel)
     return FootageSpeed(per_frame * fps, per_frame * analysis.cycle_frames)
 
 

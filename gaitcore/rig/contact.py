@@ -211,17 +211,17 @@ def clean_ground_contact(skeleton: Skeleton, poses: np.ndarray, *,
     feet = find_feet(skeleton)
     ground = _ground(skeleton, settings)
     index = [skeleton.joint_index(f) for f in feet]
-    before = skeleton.joint_positions(p)[:, index] + travel[:, None, :]
+    posed = skeleton.joint_positions(p)  # once: the feet, their legs' tops, their heels
+    before = posed[:, index] + travel[:, None, :]
     speed = _ground_speed(travel)
     legs = [_leg(skeleton, f) for f in feet]
-    tops = skeleton.joint_positions(p)[:, [top for top, _ in legs]] + travel[:, None, :]
+    tops = posed[:, [top for top, _ in legs]] + travel[:, None, :]
     tops[..., 1] = skeleton.joint_positions(skeleton.rest_pose())[[t for t, _ in legs], 1]
     stance = np.stack([_within_reach(before[:, i], stance_mask(
         before[:, i], ground, animal_speed_m=speed, settings=settings), anchored,
         tops[:, i], legs[i][1], ground, settings) for i in range(len(feet))], axis=1)
     heels = [_foot_joint(skeleton, f) for f in feet]
-    heel_y = skeleton.joint_positions(p)[:, [skeleton.joint_index(h or f)
-                                            for h, f in zip(heels, feet)], 1]
+    heel_y = posed[:, [skeleton.joint_index(h or f) for h, f in zip(heels, feet)], 1]
     targets = np.stack([_targets(before[:, i], heel_y[:, i] - before[:, i, 1], stance[:, i],
                                  anchored, ground, settings.blend_frames)
                         for i in range(len(feet))], axis=1)

@@ -301,12 +301,7 @@ def rig_measures(skeleton: Skeleton, proportions: RigProportions) -> tuple[float
     tops = [j for j, joint in enumerate(rig.joints) if parts[j] == "body"]  # trunk, shoulder blades
     ground = float(pos[:, 1].min())
     withers = float(pos[tops, 1].max() - ground)
-    bellies = []
-    for b in rig.bone_ellipsoids():
-        if b.child in trunk:
-            rot = world[b.joint, :3, :3]
-            centre = rot @ b.center + pos[b.joint]
-            reach = np.sqrt(((rot @ (b.axes * b.radii)) ** 2).sum(axis=1))[1]
-            bellies.append(float(centre[1] - reach))
+    bellies = [float(centre[1] - half[1]) for centre, half in
+               (b.world_box(world) for b in rig.bone_ellipsoids() if b.child in trunk)]
     legs = (min(bellies) if bellies else float(pos[trunk, 1].min()) if trunk else ground) - ground
     return body_length, withers, max(legs, 0.0)

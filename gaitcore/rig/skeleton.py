@@ -111,6 +111,13 @@ class BoneEllipsoid:
     radii: np.ndarray
     color: tuple[float, float, float]
 
+    def world_box(self, world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Its centre and its half-extent along each world axis in a pose whose joint
+        transforms are ``world`` (J, 4, 4): the box that holds it, shape (3,) each."""
+        rot = world[self.joint, :3, :3]
+        semi = rot @ (self.axes * self.radii)  # world semi-axes as columns
+        return rot @ self.center + world[self.joint, :3, 3], np.sqrt((semi ** 2).sum(axis=1))
+
 
 @dataclass(frozen=True, eq=False)
 class Skeleton:

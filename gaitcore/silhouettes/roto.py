@@ -325,18 +325,12 @@ class RotoSegmentation:
         """Each frame of ``before`` (its mask before a background correction) only loses
         subject: its key cut or both passes' cuts bounded by it."""
         for t, mask in before.items():
-            stores = ((self.keys,) if t in self.keys else ()) + (self.fwd, self.bwd)
-            for store in stores:
+            if t in self.keys:
+                self.keys[t] = _within(self.keys[t], mask)
+            for store in (self.fwd, self.bwd):
                 cut = store.get(t)
-                if cut is None:
-                    continue
-                bounded = cut.mask & mask
-                if not np.array_equal(bounded, cut.mask):
-                    bounded_cut = Cut(bounded.astype(np.uint8), cut.confidence)
-                    if store is self.keys:
-                        self.keys[t] = bounded_cut
-                    else:
-                        store.put(t, bounded_cut)
+                if cut is not None:
+                    store.put(t, _within(cut, mask))
 
     def erase(self, indices: Collection[int], progress: Progress | None = None
               ) -> tuple[int, int]:
@@ -1058,6 +1052,13 @@ def _touching(changed: np.ndarray, band: np.ndarray) -> np.ndarray:
     _, parts = cv2.connectedComponents(changed.view(np.uint8), connectivity=8)
     reached = np.unique(parts[band & changed])
     return np.isin(parts, reached[reached > 0])
+
+
+def _within(cut: Cut, mask: np.ndarray) -> Cut:
+    """``cut`` with what lies outside ``mask`` taken away (the cut itself when nothing is)."""
+    bounded = cut.mask & mask
+    return cut if np.array_equal(bounded, cut.mask) else Cut(bounded.astype(np.uint8),
+                                                             cut.confidence)
 
 
 def _union(a: np.ndarray | None, b: np.ndarray | None) -> np.ndarray | None:
