@@ -246,6 +246,9 @@ def _run_animate(args: argparse.Namespace) -> int:
                              f"got {args.fps}")
     if args.speed is not None and not (np.isfinite(args.speed) and 0 < args.speed <= 100):
         raise GaitInputError(f"--speed must be metres per second in (0, 100], got {args.speed}")
+    if args.root == "footage" and args.skeleton is None:
+        raise GaitInputError("--root footage needs --skeleton: the footage's travel is "
+                             "measured at the rig's size")
     skeleton = None
     if args.skeleton is not None:
         from gaitcore.project.steps import read_rig

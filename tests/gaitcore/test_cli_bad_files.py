@@ -154,6 +154,12 @@ def test_paths_that_would_crash_block_or_loop_are_refused_in_one_line(tmp_path, 
     _refused(["analyze", "masks", "--out", "a" * 300], capsys, "too long")
     _refused(["evaluate", "--gait", "walk", "--height", "9007199254740993"], capsys,
              "--height must be")
+    (tmp_path / "an.json").write_text(json.dumps(ANALYSIS))
+    (tmp_path / "keys.csv").write_text("frame,a.rz\n1,0\n4,1\n")
+    for extra, says in ((["--root", "footage"], "needs --skeleton"),
+                        (["--speed", "nan"], "--speed must be")):
+        _refused(["animate", "an.json", "--key-poses", "keys.csv", "--out", "c.csv", *extra],
+                 capsys, says)
 
 
 def test_an_image_bomb_and_huge_numbers_are_refused_before_the_arithmetic(tmp_path, capsys):
