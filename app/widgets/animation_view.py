@@ -128,6 +128,7 @@ class AnimationView(QWidget):
                                        movable=False, brush=pg.mkBrush(0, 150, 0, 30))
             self.plot.addItem(band)
             self._curves.append(band)
+        self.plot.plotItem.layout.activate()  # the legend to its row now, not at the corner
         self.frame_line.setValue(self._state.frame)
 
     def _on_click(self, event) -> None:

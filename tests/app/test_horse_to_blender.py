@@ -119,7 +119,7 @@ def test_a_horse_walk_goes_from_a_folder_to_blender_walking_on_the_ground(
     assert _pose_by_hoof_drags(window, kp, size) >= 2 * len(analysis.posed_frames)
     window.state.set_frame(analysis.key_frames[0])
     wait_ready(qtbot, window)
-    window.grab().save(str(artifacts_dir / "app_horse_walk_posed.png"))
+    window.snapshot().save(str(artifacts_dir / "app_horse_walk_posed.png"))
     out = tmp_path / "export"
     out.mkdir()
     _export(qtbot, window, asker, out / "a.bvh")
