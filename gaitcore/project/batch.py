@@ -36,9 +36,10 @@ from gaitcore.analysis.analyze import Analysis, AnalysisSettings
 from gaitcore.errors import GaitInputError
 from gaitcore.io.analysis_file import write_analysis_json
 from gaitcore.project.document import Project
-from gaitcore.project.manifest import ClipSpec, spec_from_dict
+from gaitcore.project.manifest import ClipSpec, is_clip_id, spec_from_dict
 from gaitcore.project.steps import analyze, open_source, segment, silhouettes_from_masks
 from gaitcore.project.storage import save_project, write_atomic
+from gaitcore.schema import MiB, describe, parse_json, read_json, read_text
 from gaitcore.silhouettes.extract import is_mask_folder
 
 PROJECT_NAME = "clip.gaitproj"
@@ -55,6 +56,12 @@ SUMMARY_COLUMNS = ("clip", "status", "usable", "verdict", "period", "r1", "r2", 
                    "cycle_stop", "frames", "error", "path", "box", "subject", "background",
                    "start", "stop", "fps")
 """Columns of ``summary.csv`` (and keys of each clip of ``summary.json``)."""
+MAX_CLIPS = 1_000_000
+"""Most clips a summary may list."""
+MAX_RESULT_BYTES = MiB
+"""Largest ``result.json`` read back (one summary row)."""
+MAX_SUMMARY_BYTES = 1024 * MiB
+"""Largest summary read (a million clips)."""
 
 
 @dataclass(frozen=True)
@@ -124,21 +131,31 @@ class ClipSummary:
         return row
 
     @classmethod
-    def from_row(cls, row: dict) -> ClipSummary:
+    def from_row(cls, row: object) -> ClipSummary:
         """Read back :meth:`to_row` (JSON values, or the strings of a CSV row).
 
         Raises
         ------
         GaitInputError
-            For a row that is not a batch summary row.
+            For a row that is not a batch summary row: not a table of plain values, an
+            unknown status, a clip id that cannot name a folder, a non-finite number.
         """
+        if not isinstance(row, dict):
+            raise GaitInputError(f"batch summary row {describe(row)} is not a row of values")
+        shown = str(row.get("clip", "?"))[:40]
         try:
+            for key, value in row.items():
+                if not isinstance(value, (str, int, float, bool, type(None))):
+                    raise ValueError(f"{str(key)[:40]} holds {describe(value)}")
             status = str(row["status"])
             if status not in STATUSES:
-                raise ValueError(f"status {status!r}")
+                raise ValueError(f"status {status[:40]!r}")
+            clip = str(row["clip"])
+            if not is_clip_id(clip):
+                raise ValueError(f"clip id {clip[:40]!r} cannot name a folder")
             spec = None if status == "bad row" else spec_from_dict(row)
             return cls(
-                clip=str(row["clip"]), status=status, source=str(row.get("path") or ""),
+                clip=clip, status=status, source=str(row.get("path") or ""),
                 spec=spec, frames=_opt(row.get("frames"), int),
                 usable=_opt(row.get("usable"), lambda v: v if isinstance(v, bool) else v == "True"),
                 verdict=str(row.get("verdict") or ""), period_frames=_opt(row.get("period"), float),
@@ -147,11 +164,10 @@ class ClipSummary:
                 cycle_stop=_opt(row.get("cycle_stop"), int),
                 error=str(row.get("error") or ""),
             )
-        except (KeyError, TypeError, ValueError) as exc:
+        except (KeyError, TypeError, ValueError, OverflowError) as exc:
             if isinstance(exc, GaitInputError):
                 raise
-            raise GaitInputError(f"batch summary row {row.get('clip', '?')!r} is malformed "
-                                 f"({exc})") from None
+            raise GaitInputError(f"batch summary row {shown!r} is malformed ({exc})") from None
 
 
 def pending(spec: ClipSpec) -> ClipSummary:
@@ -225,11 +241,13 @@ def finished_result(out_dir: Path, spec: ClipSpec) -> ClipSummary | None:
     does a failed clip, whose file may have been fixed since).
     """
     try:
-        data = json.loads((Path(out_dir) / spec.clip / RESULT_NAME).read_text(encoding="utf-8"))
-        if data.get("format") != CLIP_FORMAT or data.get("version", 0) > VERSION:
+        data = read_json(Path(out_dir) / spec.clip / RESULT_NAME, what="clip result",
+                         max_bytes=MAX_RESULT_BYTES).value
+        if (not isinstance(data, dict) or data.get("format") != CLIP_FORMAT
+                or data.get("version") != VERSION):
             return None
-        stored = ClipSummary.from_row(data["clip"])
-    except (OSError, ValueError, KeyError, TypeError):
+        stored = ClipSummary.from_row(data.get("clip"))
+    except GaitInputError:  # missing, damaged or not a regular file: the clip runs again
         return None
     if stored.status != "done" or stored.spec != spec:
         return None
@@ -239,7 +257,7 @@ def finished_result(out_dir: Path, spec: ClipSpec) -> ClipSummary | None:
 def remove_partial_folders(out_dir: Path) -> None:
     """Delete the temporary clip folders that an interrupted batch left in ``out_dir``."""
     for entry in Path(out_dir).glob(f".*{_PARTIAL}*"):
-        shutil.rmtree(entry, ignore_errors=True)
+        _remove(entry)
 
 
 def write_summary(out_dir: Path, rows: list[ClipSummary], *, manifest: Path) -> None:
@@ -263,21 +281,24 @@ def read_summary(path: str | Path) -> tuple[ClipSummary, ...]:
         Unreadable file, not a batch summary, or malformed rows.
     """
     path = Path(path)
+    advice = "open the summary.json or summary.csv that 'gaitcore batch' wrote"
+    text = read_text(path, what="batch summary", max_bytes=MAX_SUMMARY_BYTES)
     try:
-        text = path.read_text(encoding="utf-8")
         if path.suffix.lower() == ".json":
-            data = json.loads(text)
-            if not isinstance(data, dict) or data.get("format") != FORMAT:
+            data = parse_json(text, what=f"batch summary {path}", advice=advice)
+            if data.key("format", None).value != FORMAT:
                 raise ValueError("not a Gait Studio batch summary")
-            rows = data["clips"]
+            rows = [row.value for row in data.key("clips").items(max_len=MAX_CLIPS)]
         else:
             rows = list(csv.DictReader(io.StringIO(text)))
             if rows and "status" not in rows[0]:
                 raise ValueError("no 'status' column")
-    except (OSError, UnicodeDecodeError, ValueError, KeyError, csv.Error) as exc:
-        reason = getattr(exc, "strerror", None) or exc
-        raise GaitInputError(f"cannot read the batch summary {path}: {reason}; open the "
-                             "summary.json or summary.csv that 'gaitcore batch' wrote") from None
+            if len(rows) > MAX_CLIPS:
+                raise ValueError(f"more than {MAX_CLIPS} clips")
+    except (ValueError, csv.Error) as exc:
+        if isinstance(exc, GaitInputError):
+            raise
+        raise GaitInputError(f"cannot read the batch summary {path}: {exc}; {advice}") from None
     return tuple(ClipSummary.from_row(row) for row in rows)
 
 
@@ -312,9 +333,17 @@ def _publish(tmp: Path, final: Path) -> None:
         old = final.with_name(f".{final.name}{_PARTIAL}old-{uuid.uuid4().hex[:8]}")
         final.replace(old)
         tmp.replace(final)
-        shutil.rmtree(old, ignore_errors=True)
+        _remove(old)
     else:
         tmp.replace(final)
+
+
+def _remove(path: Path) -> None:
+    """Delete a folder, or whatever took a folder's name (a file, a pipe, a link)."""
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        path.unlink(missing_ok=True)
 
 
 def _write_json(path: Path, data: dict) -> None:
@@ -327,7 +356,12 @@ def _rounded(value: float, digits: int) -> float | None:
 
 
 def _opt(value, kind):
-    return None if value is None or value == "" else kind(value)
+    """None for an empty cell, else ``kind(value)`` of a finite number (or its text)."""
+    if value is None or value == "":
+        return None
+    if kind in (int, float) and not math.isfinite(float(value)):
+        raise ValueError(f"{value!r} is not a finite number")
+    return kind(value)
 
 
 __all__ = [

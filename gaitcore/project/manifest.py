@@ -184,6 +184,8 @@ def _parse_row(header: list[str], cells: list[str], line: int, base: Path) -> Cl
 
 
 def _rects(text: str, what: str) -> tuple[Rect, ...]:
+    if not isinstance(text, str):
+        raise GaitInputError(f"{what} {text!r} is not text of rectangles x,y,w,h")
     rects = []
     for part in (p for p in text.split(";") if p.strip()):
         values = part.replace(",", " ").split()
@@ -230,6 +232,12 @@ RESERVED_IDS = ("summary.csv", "summary.json", LOCK_NAME)
 """Names the batch gives its own files in the output folder: no clip folder may take them."""
 MAX_ID_CHARS = 200
 """The longest clip id (a folder name, with room for the batch's suffixes)."""
+
+
+def is_clip_id(text: str) -> bool:
+    """True when ``text`` can name a clip's folder in a batch's output folder."""
+    return (bool(_SAFE_ID.match(text)) and len(text) <= MAX_ID_CHARS + len("-clip")
+            and text.lower() not in RESERVED_IDS)
 
 
 def _clip_id(given: str, clip_path: Path, base: Path) -> str:

@@ -71,3 +71,15 @@ def test_a_file_that_is_not_a_summary_is_one_error(window, asker, tmp_path):
     bad.write_text("{}")
     assert window.open_batch_summary(bad) is None
     assert len(asker.errors) == 1 and "cannot read the batch summary" in asker.errors[0]
+
+
+@pytest.mark.parametrize("text", [
+    '{"format": "gaitstudio-batch", "clips": [[1]]}',
+    '{"format": "gaitstudio-batch", "clips": [{"clip": "a", "status": "done", "box": -1}]}',
+    '{"format": "gaitstudio-batch", "clips": ' + "[" * 50_000 + "]" * 50_000 + "}",
+])
+def test_a_summary_of_the_wrong_types_or_nesting_is_one_error(window, asker, tmp_path, text):
+    bad = tmp_path / "summary.json"
+    bad.write_text(text)
+    assert window.open_batch_summary(bad) is None
+    assert len(asker.errors) == 1 and "\n" not in asker.errors[0]

@@ -145,7 +145,7 @@ def test_summary_round_trips_through_csv_and_json(masks, tmp_path):
     for name in ("summary.csv", "summary.json"):
         assert read_summary(tmp_path / name) == tuple(rows)
     assert spec_from_dict(spec.to_dict()) == spec
-    with pytest.raises(GaitInputError, match="cannot read the batch summary"):
+    with pytest.raises(GaitInputError, match="batch summary not found"):
         read_summary(tmp_path / "m.csv")
 
 
@@ -222,3 +222,66 @@ def test_a_second_batch_into_the_same_folder_is_refused_while_the_first_holds_it
                 pass
     with batch_lock(tmp_path):  # let go when the first ended
         pass
+
+
+_DONE = {"format": "gaitstudio-batch-clip", "version": 1}
+
+
+@pytest.mark.parametrize("damage", [
+    "box -1", "deep nesting", "integer of 5000 digits", "FIFO", "folder", "clip not a row",
+    "infinite period", "unsafe clip id"])
+def test_a_damaged_clip_result_runs_the_clip_again_and_never_blocks(masks, tmp_path, damage):
+    import os
+
+    spec = ClipSpec("w", masks.absolute())
+    row = analyze_clip(spec, tmp_path)
+    result = tmp_path / "w" / "result.json"
+    stored = json.loads(result.read_text())["clip"]
+    result.unlink()
+    if damage == "FIFO":
+        os.mkfifo(result)
+    elif damage == "folder":
+        result.mkdir()
+    else:
+        text = {
+            "box -1": json.dumps({**_DONE, "clip": {**stored, "box": -1}}),
+            "deep nesting": json.dumps({**_DONE, "clip": 0}).replace("0}", "[" * 100_000
+                                                                      + "]" * 100_000 + "}"),
+            "integer of 5000 digits": json.dumps({**_DONE, "clip": stored}).replace(
+                '"frames": 90', '"frames": ' + "9" * 5000),
+            "clip not a row": json.dumps({**_DONE, "clip": [stored]}),
+            "infinite period": json.dumps({**_DONE, "clip": {**stored, "period": 1e400}}),
+            "unsafe clip id": json.dumps({**_DONE, "clip": {**stored, "clip": "../w"}}),
+        }[damage]
+        result.write_text(text)
+    assert finished_result(tmp_path, spec) is None
+    assert analyze_clip(spec, tmp_path) == row  # the re-run replaces the damaged folder
+    assert finished_result(tmp_path, spec) == row
+    assert [p.name for p in tmp_path.iterdir()] == ["w"]
+
+
+@pytest.mark.parametrize("clips", [
+    5, [[1]], [{"clip": "a", "status": "done", "path": "x", "box": -1}],
+    [{"clip": "a", "status": "done", "path": "x", "r1": {"a": 1}}],
+    [{"clip": "../../etc", "status": "failed", "path": "x"}],
+    [{"clip": "a", "status": "done", "path": "x", "frames": 1e400}]])
+def test_a_summary_of_the_wrong_types_is_one_error(tmp_path, clips):
+    path = tmp_path / "summary.json"
+    path.write_text(json.dumps({"format": "gaitstudio-batch", "clips": clips}))
+    with pytest.raises(GaitInputError) as caught:
+        read_summary(path)
+    assert "\n" not in str(caught.value)
+
+
+def test_a_summary_that_is_a_fifo_or_nests_deeply_is_one_error(tmp_path):
+    import os
+
+    deep = tmp_path / "summary.json"
+    deep.write_text('{"format": "gaitstudio-batch", "clips": ' + "[" * 100_000 + "]" * 100_000
+                    + "}")
+    with pytest.raises(GaitInputError, match="too deeply"):
+        read_summary(deep)
+    fifo = tmp_path / "fifo.json"
+    os.mkfifo(fifo)
+    with pytest.raises(GaitInputError, match="not a regular file"):
+        read_summary(fifo)
