@@ -8,7 +8,6 @@ interrupted. An unexpected error (a bug) also ends in one line and status 2; set
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import re
 import sys
@@ -20,7 +19,7 @@ from gaitcore.errors import GaitInputError
 from gaitcore.io import segment_command
 from gaitcore.progress import Cancelled
 from gaitcore.project import batch_command, pose_command
-from gaitcore.schema import MAX_FPS, check_path
+from gaitcore.schema import MAX_FPS, check_path, dump_json
 
 
 class _Parser(argparse.ArgumentParser):
@@ -139,7 +138,8 @@ def _run_analyze(args: argparse.Namespace) -> int:
     analysis = analyze(silhouettes, settings, first_frame=args.start)
     write_analysis_json(args.out / "analysis.json", analysis, source=str(args.input), fps=fps)
     if args.json:
-        print(json.dumps(analysis_to_dict(analysis, source=str(args.input), fps=fps), indent=1))
+        print(dump_json(analysis_to_dict(analysis, source=str(args.input), fps=fps), indent=1,
+                        what="the analysis"))
     else:
         d = analysis.diagnosis
         sel = analysis.selection
@@ -376,7 +376,7 @@ def _run_evaluate(args: argparse.Namespace) -> int:
             plot_trajectory(ev, args.plots / f"{args.gait}_pc1_pc2.png", pcs=pcs, keys=keys)
         plot_error_curves(ev, args.plots / f"{args.gait}_error.png")
     if args.json:
-        print(json.dumps(ev.to_dict(), indent=1))
+        print(dump_json(ev.to_dict(), indent=1, what="the evaluation"))
         return 0
     print(f"{args.gait}: {ev.n_angles} angles, period {ev.period_frames:.1f} frames")
     print("variance %: " + " ".join(f"{100 * v:.1f}" for v in ev.variance_ratio))

@@ -210,6 +210,37 @@ def read_json(path: str | os.PathLike, *, what: str, max_bytes: int,
     return parse_json(text, what=f"{what} {path}", advice=advice)
 
 
+def dump_json(value: Any, *, what: str, **options: Any) -> str:
+    """JSON text of ``value`` (``json.dumps`` with ``options``), refusing non-finite numbers.
+
+    JSON has no NaN or infinity; a writer that met one would write a file no reader takes.
+
+    Raises
+    ------
+    GaitInputError
+        Naming ``what`` and the place of the first number that is not finite
+        (``clips[3].r1``).
+    """
+    try:
+        return json.dumps(value, allow_nan=False, **options)
+    except ValueError:
+        raise GaitInputError(f"{what} was not written: {_first_non_finite(value)} is not a "
+                             "finite number; check the inputs it came from") from None
+
+
+def _first_non_finite(value: Any, path: str = "") -> str:
+    if isinstance(value, float) and not math.isfinite(value):
+        return f"{path or 'the value'} ({value})"
+    items: Any = (value.items() if isinstance(value, dict)
+                  else enumerate(value) if isinstance(value, (list, tuple)) else ())
+    for key, child in items:
+        found = _first_non_finite(child, f"{path}[{key}]" if isinstance(key, int)
+                                  else f"{path}.{key}" if path else str(key))
+        if found:
+            return found
+    return ""
+
+
 class JsonValue:
     """A parsed JSON value that knows where it is, with checked accessors.
 

@@ -16,7 +16,6 @@ first (null when it does not cross the view: it stays, or the camera follows it)
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +23,7 @@ import numpy as np
 from gaitcore.analysis.analyze import Analysis
 from gaitcore.animation.animate import AnalysisRecord, stored
 from gaitcore.errors import GaitInputError
-from gaitcore.schema import MAX_FPS, JsonValue, read_json
+from gaitcore.schema import MAX_FPS, JsonValue, dump_json, read_json
 
 FORMAT = "gaitstudio-analysis"
 VERSION = 1
@@ -101,13 +100,8 @@ def write_analysis_json(path: str | Path, analysis: Analysis, *, source: str = "
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(path.suffix + ".tmp")
-    try:  # JSON has no NaN: a number that is not one is refused, never written
-        text = json.dumps(analysis_to_dict(analysis, source=source, fps=fps), indent=1,
-                          allow_nan=False)
-    except ValueError:
-        raise GaitInputError("the analysis holds a value that is not a number, so "
-                             f"{path} was not written: check the silhouettes, or report it "
-                             "with the clip") from None
+    text = dump_json(analysis_to_dict(analysis, source=source, fps=fps), indent=1,
+                     what=f"the analysis {path}")
     tmp.write_text(text)
     tmp.replace(path)
 

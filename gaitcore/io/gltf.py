@@ -12,7 +12,6 @@ json and struct only; see the glTF 2.0 specification, section 4.4 (GLB file form
 
 from __future__ import annotations
 
-import json
 import struct
 from pathlib import Path
 
@@ -22,6 +21,7 @@ from gaitcore.errors import GaitInputError
 from gaitcore.io.bone_names import bone_names
 from gaitcore.rig.rotations import quaternions_zxy
 from gaitcore.rig.skeleton import CHANNEL_ORDER, Skeleton
+from gaitcore.schema import dump_json
 
 GLB_MAGIC = 0x46546C67  # b"glTF"
 CHUNK_JSON = 0x4E4F534A
@@ -201,7 +201,7 @@ class _Document:
     def write(self, path: Path) -> None:
         doc = dict(self.doc, accessors=self.accessors, bufferViews=self.views,
                    buffers=[{"byteLength": len(self.blob)}])
-        text = json.dumps(doc, separators=(",", ":")).encode("utf-8")
+        text = dump_json(doc, separators=(",", ":"), what=f"glTF {path}").encode("utf-8")
         text += b" " * (-len(text) % 4)
         total = 12 + 8 + len(text) + 8 + len(self.blob)
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -11,12 +11,11 @@ pixels, 0-based frames. ``segmentation.json``: ``{"format": "gaitstudio-segmenta
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from pathlib import Path
 
 from gaitcore.errors import GaitInputError
-from gaitcore.schema import read_json
+from gaitcore.schema import dump_json, read_json
 from gaitcore.silhouettes.annotations import SCRIBBLE_LABELS, Scribble
 from gaitcore.silhouettes.roto import FrameState
 
@@ -107,5 +106,5 @@ def write_segmentation_json(path: str | Path, states: Sequence[FrameState], *,
 def _write_json(path: Path, data: dict) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(json.dumps(data, indent=1, allow_nan=False), encoding="utf-8")
+    tmp.write_text(dump_json(data, indent=1, what=str(path)), encoding="utf-8")
     tmp.replace(path)

@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 import shutil
 import uuid
@@ -39,7 +38,7 @@ from gaitcore.project.document import Project
 from gaitcore.project.manifest import ClipSpec, is_clip_id, spec_from_dict
 from gaitcore.project.steps import analyze, open_source, segment, silhouettes_from_masks
 from gaitcore.project.storage import save_project, write_atomic
-from gaitcore.schema import MiB, describe, parse_json, read_json, read_text
+from gaitcore.schema import MiB, describe, dump_json, parse_json, read_json, read_text
 from gaitcore.silhouettes.extract import is_mask_folder
 
 PROJECT_NAME = "clip.gaitproj"
@@ -261,15 +260,23 @@ def remove_partial_folders(out_dir: Path) -> None:
 
 
 def write_summary(out_dir: Path, rows: list[ClipSummary], *, manifest: Path) -> None:
-    """Write ``summary.csv`` and ``summary.json`` in ``out_dir``, each atomically."""
+    """Write ``summary.csv`` and ``summary.json`` in ``out_dir``, each atomically.
+
+    Raises
+    ------
+    GaitInputError
+        A row holds a number that is not finite: neither file is written.
+    """
     table = [r.to_row() for r in rows]
+    summary = Path(out_dir) / SUMMARY_NAMES[1]
+    doc = dump_json({"format": FORMAT, "version": VERSION, "manifest": str(manifest),
+                     "clips": table}, indent=1, what=str(summary))
     text = io.StringIO()
     writer = csv.DictWriter(text, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
     writer.writeheader()
     writer.writerows({k: "" if v is None else v for k, v in row.items()} for row in table)
     write_atomic(Path(out_dir) / SUMMARY_NAMES[0], text.getvalue().encode("utf-8"))
-    _write_json(Path(out_dir) / SUMMARY_NAMES[1], {
-        "format": FORMAT, "version": VERSION, "manifest": str(manifest), "clips": table})
+    write_atomic(summary, (doc + "\n").encode("utf-8"))
 
 
 def read_summary(path: str | Path) -> tuple[ClipSummary, ...]:
@@ -347,7 +354,7 @@ def _remove(path: Path) -> None:
 
 
 def _write_json(path: Path, data: dict) -> None:
-    write_atomic(path, (json.dumps(data, indent=1, allow_nan=False) + "\n").encode("utf-8"))
+    write_atomic(path, (dump_json(data, indent=1, what=str(path)) + "\n").encode("utf-8"))
 
 
 def _rounded(value: float, digits: int) -> float | None:

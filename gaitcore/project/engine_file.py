@@ -33,7 +33,6 @@ that undo swaps, and older Gait Studio versions ignore it with no format version
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 import re
 from collections.abc import Callable
@@ -48,7 +47,7 @@ from gaitcore.footage.sources import FrameSource
 from gaitcore.project.document import Project
 from gaitcore.project.roto_session import RotoSession, reusable, segmentation_key
 from gaitcore.project.storage import array_file, sidecar_dir, write_array, write_atomic
-from gaitcore.schema import JsonValue, read_json, read_npy
+from gaitcore.schema import JsonValue, dump_json, read_json, read_npy
 from gaitcore.silhouettes.ground import StillBackground
 from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import WorkingSize
@@ -166,7 +165,8 @@ def write_engine(path: str | os.PathLike, fingerprint: str, state: RotoState) ->
                "work": {"scale": work.scale, "wh": list(work.wh), "shape": list(work.shape),
                         "subject_side": work.subject_side},
                "arrays": arrays}
-        write_atomic(side / ENGINE_FILE, (json.dumps(doc, indent=1) + "\n").encode("utf-8"))
+        write_atomic(side / ENGINE_FILE, (dump_json(doc, indent=1, what="the segmentation state")
+                                          + "\n").encode("utf-8"))
         _remove_arrays(side, keep=set(arrays.values()))
     except OSError as exc:
         raise GaitInputError(f"cannot save the segmentation engine to {side}: "

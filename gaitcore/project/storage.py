@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import hashlib
 import io
-import json
 import os
 import re
 from dataclasses import asdict
@@ -32,7 +31,7 @@ from gaitcore.errors import GaitInputError
 from gaitcore.project.document import ORIGINS, AnimationOptions, FootageFit, Project, Silhouettes
 from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
-from gaitcore.schema import MAX_FPS, JsonValue, check_path, read_json, read_npy
+from gaitcore.schema import MAX_FPS, JsonValue, check_path, dump_json, read_json, read_npy
 from gaitcore.silhouettes.annotations import SCRIBBLE_LABELS, Rect, Scribble, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
 
@@ -101,7 +100,7 @@ def save_project(project: Project, path: str | os.PathLike) -> None:
         side.mkdir(parents=True, exist_ok=True)
         _remove_stale_temporaries(p, side)
         doc = _to_json(project, p.parent, side)
-        write_atomic(p, (json.dumps(doc, indent=1) + "\n").encode("utf-8"))
+        write_atomic(p, (dump_json(doc, indent=1, what=f"project {p}") + "\n").encode("utf-8"))
         keep = set(doc["silhouettes"]["arrays"].values()) if doc["silhouettes"] else set()
         for f in side.iterdir():
             if _ARRAY_NAME.match(f.name) and f.name not in keep:

@@ -18,7 +18,6 @@ The JSON file format (``"format": "gaitstudio-skeleton"``, ``"version": 1``) is 
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -29,7 +28,7 @@ import numpy as np
 
 from gaitcore.errors import GaitInputError
 from gaitcore.rig.rotations import euler_zxy_matrix
-from gaitcore.schema import JsonValue, describe, read_json
+from gaitcore.schema import JsonValue, describe, dump_json, read_json
 
 FORMAT = "gaitstudio-skeleton"
 VERSION = 1
@@ -225,8 +224,8 @@ class Skeleton:
         """JSON text of :meth:`to_dict`, one joint per line; also written to ``path`` if given."""
         doc = self.to_dict()
         joints = doc.pop("joints")
-        head = json.dumps(doc, indent=2)[:-2]
-        body = ",\n".join("    " + json.dumps(j) for j in joints)
+        head = dump_json(doc, indent=2, what=f"skeleton {self.name}")[:-2]
+        body = ",\n".join("    " + dump_json(j, what=f"skeleton {self.name}") for j in joints)
         text = f'{head},\n  "joints": [\n{body}\n  ]\n}}\n'
         if path is not None:
             Path(path).write_text(text, encoding="utf-8")

@@ -115,3 +115,17 @@ def test_a_footage_path_with_a_nul_byte_in_a_project_is_refused_in_one_line(tmp_
     with pytest.raises(GaitInputError, match="NUL byte"):
         load_project(tmp_path / "p.gaitproj")
     assert check_path(tmp_path / "new.csv", what="--out") == tmp_path / "new.csv"
+
+
+def test_the_json_writer_refuses_non_finite_numbers_and_names_the_first(tmp_path):
+    from gaitcore.errors import GaitInputError
+    from gaitcore.project.batch import ClipSummary, write_summary
+    from gaitcore.schema import dump_json
+
+    assert dump_json({"a": [1.5]}, what="x") == '{"a": [1.5]}'
+    with pytest.raises(GaitInputError, match=r"summary was not written: clips\[1\]\.r1 \(nan\)"):
+        dump_json({"clips": [{"r1": 0.5}, {"r1": float("nan")}]}, what="summary")
+    rows = [ClipSummary("a", "done", "x", r1=float("inf"), r2=0.5)]
+    with pytest.raises(GaitInputError, match=r"clips\[0\]\.r1 \(inf\) is not a finite"):
+        write_summary(tmp_path, rows, manifest=tmp_path / "m.csv")
+    assert not any(tmp_path.iterdir())
