@@ -24,13 +24,14 @@ from gaitcore.analysis.advice import Advice, advise
 from gaitcore.analysis.alternates import loop_angle, propose_alternates
 from gaitcore.analysis.cycles import Cycle, find_cycles
 from gaitcore.analysis.framing import Framing, footage_travel, frame_silhouettes, framing_notes
-from gaitcore.analysis.image_pca import ImagePCA
+from gaitcore.analysis.image_pca import DENSE_LIMIT, ImagePCA
 from gaitcore.analysis.kernel import DEFAULT_ALPHA
 from gaitcore.analysis.keyimages import KeySelection, select_key_images
 from gaitcore.analysis.rhythm import Rhythm, find_rhythm, longest_period
 from gaitcore.analysis.spectrum import MIN_FRAMES, Diagnosis, diagnose
 from gaitcore.analysis.verdict import no_repeat
 from gaitcore.errors import GaitInputError
+from gaitcore.limits import check_memory
 from gaitcore.progress import Progress
 from gaitcore.runs import true_runs
 from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiClip
@@ -286,6 +287,7 @@ def analyze_silhouettes(
         A trim outside the silhouettes, too few frames for the keys, no motion.
     """
     start, stop = _trim(frame_range, first_frame, roi.crops.shape[0])
+    _check_memory(roi)
     back = tuple(f - first_frame for f in settings.bring_back)
     framed, framing = frame_silhouettes(roi, scale=settings.stabilize_roi, bring_back=back)
     lo, hi = _kept_stretch(framed.lost[start:stop])
@@ -331,6 +333,29 @@ def _kept_stretch(left_out: np.ndarray) -> tuple[int, int]:
     if longest[1] - longest[0] < MIN_FRAMES:
         return 0, kept.size
     return longest
+
+
+STACK_BYTES_PER_VALUE = 5
+"""Memory per pixel of the silhouette windows that the analysis holds at once (the crops,
+their framed and working copies, the PCA's chunks): an upper bound, checked by a test."""
+DENSE_BYTES_PER_VALUE = 16
+"""Memory per value of a clip small enough for the dense PCA (its float matrix, the Gram
+matrix, the cycle search): an upper bound, checked by a test."""
+
+
+def memory_needed(n_frames: int, rows: int, cols: int) -> int:
+    """Bytes the analysis of ``n_frames`` silhouette windows of ``rows`` × ``cols`` takes."""
+    values = n_frames * rows * cols
+    return max(STACK_BYTES_PER_VALUE * values, DENSE_BYTES_PER_VALUE * min(values, DENSE_LIMIT))
+
+
+def _check_memory(roi: RoiClip) -> None:
+    """Refuse up front a clip whose analysis cannot fit in the memory left."""
+    n, rows, cols = roi.crops.shape
+    check_memory(memory_needed(n, rows, cols),
+                 job=f"analysing {n:,} frames of {cols} × {rows} pixels",
+                 advice=lambda fits: f"trim the clip to at most {int(n * fits):,} frames "
+                 "(--start and --stop, or the trim marks) and analyse its parts one by one")
 
 
 def _check_found(roi: RoiClip, settings: AnalysisSettings) -> None:

@@ -181,3 +181,38 @@ def test_an_image_bomb_and_huge_numbers_are_refused_before_the_arithmetic(tmp_pa
     cv2.imwrite(str(small / "00000.png"), np.full((30, 40, 3), (20, 90, 160), np.uint8))
     _refused(["segment", str(small), "--out", str(tmp_path / "s"), "--scribbles",
               str(tmp_path / "wide.json")], capsys, "width")
+
+
+def test_a_clip_too_large_for_the_memory_left_is_refused_with_the_figures(tmp_path, capsys,
+                                                                         monkeypatch):
+    """20,000 masks once ended in "unexpected MemoryError ... this is a bug" under a 1 GiB
+    limit; the estimate now refuses such a clip before the analysis allocates."""
+    import gaitcore.limits
+    from tests.gaitcore.walker import walker_clip, write_mask_folder
+
+    masks = write_mask_folder(tmp_path / "masks", walker_clip(60))
+    monkeypatch.setattr(gaitcore.limits, "free_memory", lambda: 100_000)
+    _refused(["analyze", str(masks), "--out", str(tmp_path / "an")], capsys,
+             "analysing 60 frames of")
+    monkeypatch.setattr(gaitcore.limits, "free_memory", lambda: None)  # nothing says: run
+    assert main(["analyze", str(masks), "--out", str(tmp_path / "an")]) == 0
+
+
+@pytest.mark.parametrize("n", [1500, 4000])
+def test_the_memory_estimate_bounds_what_the_analysis_takes(n):
+    """An upper bound that does not refuse what fits: within three times the peak, on a
+    clip the dense PCA takes and on one it streams."""
+    import tracemalloc
+
+    from gaitcore.analysis.analyze import analyze_silhouettes, memory_needed
+    from gaitcore.silhouettes.tracking import crop_rois
+    from tests.gaitcore.walker import walker_clip
+
+    roi = crop_rois(np.resize(walker_clip(48), (n, 120, 260)), max_side=160)
+    tracemalloc.start()
+    try:
+        analyze_silhouettes(roi)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak <= memory_needed(*roi.crops.shape) <= 3 * peak
