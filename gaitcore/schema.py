@@ -39,6 +39,7 @@ from typing import Any, Literal, NoReturn, overload
 import numpy as np
 
 from gaitcore.errors import GaitInputError
+from gaitcore.limits import check_memory
 
 MiB = 1 << 20
 _MAX_NPY_HEADER = 10_000
@@ -46,6 +47,9 @@ MAX_FPS = 10_000.0
 """Highest frame rate accepted anywhere (footage, projects, BVH, the command's --fps):
 high-speed cameras stay below it, and 1 / MAX_FPS still prints as a plain BVH frame time."""
 _MISSING = object()
+TEXT_MEMORY_PER_BYTE = 10
+"""Memory a reader takes per byte of a text file it parses (the text, its lines or JSON
+values, the numbers): an upper bound, checked by a test."""
 
 
 # -- files ---------------------------------------------------------------------------------
@@ -127,14 +131,18 @@ def open_regular(path: str | os.PathLike, *, what: str):
     return os.fdopen(fd, "rb")
 
 
-def read_bytes(path: str | os.PathLike, *, what: str, max_bytes: int) -> bytes:
-    """The bytes of a regular file of at most ``max_bytes`` (GaitInputError otherwise)."""
+def read_bytes(path: str | os.PathLike, *, what: str, max_bytes: int,
+               memory_per_byte: int = 1) -> bytes:
+    """The bytes of a regular file of at most ``max_bytes`` (GaitInputError otherwise), when
+    ``memory_per_byte`` times its size is free (what its reader will take)."""
     with open_regular(path, what=what) as fh:
         size = os.fstat(fh.fileno()).st_size
         if size > max_bytes:
             raise GaitInputError(f"{what} {path} is {size / MiB:.0f} MiB, more than the "
                                  f"{max_bytes / MiB:.0f} MiB such a file can hold: is it the "
                                  "right file?")
+        check_memory(size * memory_per_byte, job=f"reading {what} {path}",
+                     advice=lambda _: "is it the right file?")
         try:
             data = fh.read(size)
             grew = fh.read(1)
@@ -148,7 +156,8 @@ def read_bytes(path: str | os.PathLike, *, what: str, max_bytes: int) -> bytes:
 
 def read_text(path: str | os.PathLike, *, what: str, max_bytes: int,
               encoding: str = "utf-8", fallback: str | None = None) -> str:
-    """The text of a regular file of at most ``max_bytes``.
+    """The text of a regular file of at most ``max_bytes``, refused up front when parsing
+    it would take more memory than is free (:data:`TEXT_MEMORY_PER_BYTE`).
 
     Parameters
     ----------
@@ -159,7 +168,7 @@ def read_text(path: str | os.PathLike, *, what: str, max_bytes: int,
     fallback : str, optional
         Encoding tried when ``encoding`` fails (e.g. ``"latin-1"``, which never fails).
     """
-    data = read_bytes(path, what=what, max_bytes=max_bytes)
+    data = read_bytes(path, what=what, max_bytes=max_bytes, memory_per_byte=TEXT_MEMORY_PER_BYTE)
     for enc in (encoding, fallback):
         if enc is None:
             continue

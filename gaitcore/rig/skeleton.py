@@ -43,6 +43,9 @@ and thick short bones (the trunk) merge into one body instead of a string of dis
 MAX_JOINTS = 100_000
 """Joints a skeleton file may hold (rigs have tens to a few hundred)."""
 MAX_SKELETON_BYTES = 256 << 20
+MAX_OFFSET_M = 1000.0
+"""The farthest a joint may sit from its parent, metres (the largest animal is 30 m long):
+beyond, the numbers are a unit mistake or damage, and the rig's arithmetic breaks down."""
 
 
 @dataclass(frozen=True)
@@ -433,6 +436,10 @@ def _validate(joints: tuple[Joint, ...]) -> None:
             raise GaitInputError(
                 f"joint {j.name!r} is listed before its parent; list parents first")
         _validate_channels(j)
+        if not all(abs(v) <= MAX_OFFSET_M for v in j.offset):
+            far = max(j.offset, key=abs)
+            raise GaitInputError(f"joint {j.name!r}: an offset of {far:g} m is beyond the "
+                                 f"{MAX_OFFSET_M:g} m any rig spans: is the file in other units?")
         if j.bone_radii is not None and (j.parent is None or not any(j.offset)):
             raise GaitInputError(f"joint {j.name!r}: a bone needs a parent and a non-zero offset")
     for j in joints:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import doctest
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -129,3 +130,70 @@ def test_the_json_writer_refuses_non_finite_numbers_and_names_the_first(tmp_path
     with pytest.raises(GaitInputError, match=r"clips\[0\]\.r1 \(inf\) is not a finite"):
         write_summary(tmp_path, rows, manifest=tmp_path / "m.csv")
     assert not any(tmp_path.iterdir())
+
+
+def _big_inputs(folder):
+    """A BVH, a pose CSV and a JSON document of some megabytes each."""
+    import json
+
+    from gaitcore.io.bvh.writer import write_bvh
+    from gaitcore.io.pose_table import PoseTable, write_pose_table
+    from gaitcore.rig.skeleton import Skeleton
+
+    skel = Skeleton.from_json(Path("resources/skeletons/horse.json"))
+    values = np.random.default_rng(0).normal(size=(3000, len(skel.channel_names))) * 10
+    table = PoseTable(np.arange(3000), skel.channel_names, values)
+    write_bvh(folder / "big.bvh", skel, table)
+    write_pose_table(folder / "big.csv", table)
+    doc = skel.to_dict()
+    doc["joints"] *= 300
+    (folder / "big.json").write_text(json.dumps(doc))
+
+
+def test_text_readers_take_at_most_their_memory_per_byte(tmp_path):
+    import os
+    import tracemalloc
+
+    from gaitcore.io.bvh.reader import read_bvh
+    from gaitcore.io.pose_table import read_pose_table
+    from gaitcore.schema import TEXT_MEMORY_PER_BYTE, read_json
+
+    _big_inputs(tmp_path)
+    for name, read in (("big.bvh", read_bvh), ("big.csv", read_pose_table),
+                       ("big.json", lambda p: read_json(p, what="json", max_bytes=1 << 30))):
+        path = tmp_path / name
+        tracemalloc.start()
+        try:
+            read(path)
+            peak = tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+        assert peak <= TEXT_MEMORY_PER_BYTE * os.path.getsize(path), (name, peak)
+
+
+def test_a_file_too_large_for_the_memory_left_is_refused_before_it_is_read(tmp_path,
+                                                                          monkeypatch):
+    """A 1.5 GB BVH once ran a 1 GiB process out of memory."""
+    import gaitcore.limits
+    from gaitcore.errors import GaitInputError
+    from gaitcore.io.bvh.reader import read_bvh
+
+    huge = tmp_path / "huge.bvh"
+    with huge.open("wb") as fh:  # sparse: takes no disk
+        fh.truncate(1_500_000_000)
+    monkeypatch.setattr(gaitcore.limits, "free_memory", lambda: 1 << 30)
+    with pytest.raises(GaitInputError, match=r"reading BVH file .* needs about 14\.0 GB of "
+                                             r"memory and 1\.0 GB is free: is it the right"):
+        read_bvh(huge)
+
+
+def test_a_joint_a_billion_kilometres_away_is_refused():
+    import json
+
+    from gaitcore.errors import GaitInputError
+    from gaitcore.rig.skeleton import Skeleton
+
+    doc = json.loads(Path("resources/skeletons/horse.json").read_text())
+    doc["joints"][3]["offset"] = [1e16, 0, 0]
+    with pytest.raises(GaitInputError, match="offset of 1e\\+16 m is beyond"):
+        Skeleton.from_json(doc)
