@@ -121,6 +121,9 @@ def open_regular(path: str | os.PathLike, *, what: str):
         raise GaitInputError(f"{what} {p} is a folder, not a file: choose a file") from None
     except OSError as exc:
         raise GaitInputError(f"cannot read {what} {p}: {exc.strerror or exc}") from None
+    except ValueError:  # a NUL byte, which no file name can hold
+        raise GaitInputError(f"{what} {str(p)!r}: the name holds a NUL byte; give another "
+                             "name") from None
     mode = os.fstat(fd).st_mode
     if not stat.S_ISREG(mode):
         os.close(fd)

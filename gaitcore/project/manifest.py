@@ -24,16 +24,20 @@ is reported with one line naming its line number; the other rows run.
 from __future__ import annotations
 
 import csv
+import io
 import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from gaitcore.errors import GaitInputError
+from gaitcore.schema import MiB, read_text
 from gaitcore.silhouettes.annotations import Rect
 
 COLUMNS = ("clip", "path", "box", "subject", "background", "start", "stop", "fps")
 """The columns a manifest may have; ``path`` is required."""
+MAX_MANIFEST_BYTES = 256 * MiB
+"""Largest manifest read (a million clips with their rectangles)."""
 _SAFE_ID = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.@+-]*$")
 
 
@@ -120,12 +124,11 @@ def read_manifest(path: str | Path) -> Manifest:
         The file cannot be read as CSV, has no ``path`` column, or has no rows.
     """
     path = Path(path)
+    text = read_text(path, what="manifest", max_bytes=MAX_MANIFEST_BYTES, encoding="utf-8-sig")
     try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            rows = list(csv.reader(fh))
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        reason = getattr(exc, "strerror", None) or exc
-        raise GaitInputError(f"cannot read the manifest {path}: {reason}; give a CSV file "
+        rows = list(csv.reader(io.StringIO(text, newline="")))
+    except csv.Error as exc:
+        raise GaitInputError(f"cannot read the manifest {path}: {exc}; give a CSV file "
                              "with a header row (path,box,start,stop,fps)") from None
     header = [h.strip().lower() for h in rows[0]] if rows else []
     if "path" not in header:

@@ -71,7 +71,7 @@ def test_bad_rows_are_reported_one_line_each_and_the_rest_kept(masks):
 
 
 @pytest.mark.parametrize("text, expected", [
-    (None, "cannot read the manifest"),
+    (None, "manifest not found"),
     ("clip,box\nx,1\n", "no 'path' column"),
     ("path,box\n\n", "has no clips"),
 ])
@@ -86,7 +86,7 @@ def test_a_manifest_that_cannot_be_read_is_one_error(tmp_path, text, expected):
 def test_the_command_exits_2_with_one_line_for_a_bad_manifest(tmp_path, capsys):
     assert main(["batch", str(tmp_path / "none.csv"), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and "cannot read the manifest" in err
+    assert len(err.splitlines()) == 1 and "manifest not found" in err
     only_bad = _manifest(tmp_path, "path\nmissing.mp4\n")
     assert main(["batch", str(only_bad), "--out", str(tmp_path / "out")]) == 2
     lines = capsys.readouterr().err.strip().splitlines()

@@ -4,11 +4,13 @@ re-propagates only around its frame; damaged, stale or missing, the project stil
 from __future__ import annotations
 
 import json
+import random
 import shutil
 from dataclasses import replace
 
 import numpy as np
 import pytest
+from hypothesis import strategies as st
 
 from gaitcore.bench.scripted_user import padded_box
 from gaitcore.errors import GaitInputError
@@ -31,7 +33,7 @@ from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import Cut, WorkingSize
 from gaitcore.silhouettes.roto import FrameState
 from gaitcore.silhouettes.roto_state import RotoState
-from tests.fuzzing import DEFAULT_CASES, check_reader, mutate_json
+from tests.fuzzing import DEFAULT_CASES, fuzz, json_cases
 from tests.gaitcore.conftest import SCENE_FRAMES
 from tests.gaitcore.test_fuzz_readers import _damage_array
 from tests.gaitcore.test_roto_session import shaded_scene
@@ -273,13 +275,18 @@ def test_fuzzed_engine_files_read_as_none_or_as_masks_that_fit(tmp_path):
     write_engine(valid, "f" * 64, state)
     doc = json.loads((sidecar_dir(valid) / ENGINE_FILE).read_text())
 
-    def write_case(case_rng, folder):
+    arrays = sorted(f.name for f in sidecar_dir(valid).glob("engine-*"))
+    cases = st.one_of(json_cases(doc).map(lambda text: (text, None, 0)),
+                      st.tuples(st.just(json.dumps(doc)), st.sampled_from(arrays),
+                                st.integers(0, 2**32)))
+
+    def write_case(case, folder):
+        text, array, seed = case
         path = folder / "p.gaitproj"
         shutil.copytree(sidecar_dir(valid), sidecar_dir(path))
-        if case_rng.random() < 0.3:
-            _damage_array(case_rng.choice(sorted(sidecar_dir(path).glob("engine-*"))), case_rng)
-        else:
-            (sidecar_dir(path) / ENGINE_FILE).write_text(mutate_json(doc, case_rng))
+        (sidecar_dir(path) / ENGINE_FILE).write_text(text)
+        if array is not None:
+            _damage_array(sidecar_dir(path) / array, random.Random(seed))
         return path
 
     def fits(read):
@@ -295,6 +302,6 @@ def test_fuzzed_engine_files_read_as_none_or_as_masks_that_fit(tmp_path):
         assert len(read.frame_states) in (0, read.n_frames)
         assert all(0 <= st.confidence <= 1 for st in read.frame_states)
 
-    check_reader(write_case, lambda p: read_engine(p, "f" * 64), tmp_path / "cases",
-                 n_cases=DEFAULT_CASES, seed=3, check=fits)
+    fuzz(cases, write_case, lambda p: read_engine(p, "f" * 64), tmp_path / "cases",
+         n_cases=DEFAULT_CASES, check=fits)
     assert read_engine(valid, "f" * 64).frame_states == states

@@ -1,8 +1,10 @@
-"""Fuzzed readers: whatever a file holds, only GaitInputError leaves a reader (issue #15).
+"""Fuzzed readers: whatever a file holds or a path names, only one-line GaitInputError
+leaves a reader (issues #15 and #64).
 
-Each reader gets DEFAULT_CASES seeded mutations of a valid file in the default run and
-FUZZ_CASES under ``-m fuzz``; every case must finish within 2 s and 200 MiB (see
-:mod:`tests.fuzzing`).
+Each reader gets DEFAULT_CASES cases drawn by Hypothesis from a valid file in the default run
+and FUZZ_CASES under ``-m fuzz``, each in a forked child with a time and memory limit (see
+:mod:`tests.fuzzing`): projects, skeletons, analyses, pose tables, BVH, scribbles, batch
+manifests, a batch's clip results read back on a re-run, and batch summaries.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import strategies as st
 
 from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.bench.gaits import generate_gait
@@ -22,7 +25,16 @@ from gaitcore.io.analysis_file import read_analysis_json
 from gaitcore.io.bvh.reader import read_bvh
 from gaitcore.io.bvh.writer import write_bvh
 from gaitcore.io.pose_table import PoseTable, read_pose_table, write_pose_table
+from gaitcore.io.scribbles import read_scribbles, scribbles_to_dict
+from gaitcore.project.batch import (
+    ClipSummary,
+    analyze_clip,
+    finished_result,
+    read_summary,
+    write_summary,
+)
 from gaitcore.project.document import Project, Silhouettes
+from gaitcore.project.manifest import ClipSpec, read_manifest
 from gaitcore.project.storage import load_project, save_project, sidecar_dir
 from gaitcore.rig.skeleton import Skeleton
 from gaitcore.rig.templates import load_template
@@ -33,10 +45,11 @@ from tests.fuzzing import (
     DEFAULT_CASES,
     FUZZ_CASES,
     SPECIAL_NUMBERS,
-    check_reader,
-    mutate_json,
-    mutate_text,
+    fuzz,
+    json_cases,
+    text_cases,
 )
+from tests.gaitcore.walker import walker_clip, write_mask_folder
 
 HORSE = load_template("horse")
 POSES = generate_gait(HORSE, "walk", 4, seed=0)
@@ -97,22 +110,34 @@ def _damage_array(f: Path, rng: random.Random) -> None:
         f.write_bytes(cut[kind])
 
 
+def _write_text(name: str):
+    def write(text: str, folder: Path) -> Path:
+        (folder / name).write_text(text, encoding="utf-8", errors="surrogateescape")
+        return folder / name
+    return write
+
+
+DAMAGES = ("empty", "truncated", "bit", "huge", "short", "folder", "pipe")
+
+
 def test_fuzzed_projects_raise_only_gait_input_errors(valid_project, tmp_path, request):
     doc = json.loads((valid_project / "p.gaitproj").read_text())
+    arrays = sorted(f.name for f in sidecar_dir(valid_project / "p.gaitproj").iterdir())
+    cases = st.one_of(
+        json_cases(doc).map(lambda text: (text, None, 0)),
+        st.tuples(st.just(json.dumps(doc)), st.sampled_from(arrays), st.integers(0, 2**32)))
 
-    def write_case(rng: random.Random, folder: Path) -> Path:
+    def write(case, folder: Path) -> Path:
+        text, array, seed = case
         path = folder / "p.gaitproj"
         shutil.copytree(sidecar_dir(valid_project / "p.gaitproj"), sidecar_dir(path))
         (folder / "clip").mkdir()
-        if rng.random() < 0.2:
-            path.write_text(json.dumps(doc))
-            _damage_array(rng.choice(sorted(sidecar_dir(path).iterdir())), rng)
-        else:
-            path.write_text(mutate_json(doc, rng))
+        path.write_text(text)
+        if array is not None:
+            _damage_array(sidecar_dir(path) / array, random.Random(seed))
         return path
 
-    check_reader(write_case, load_project, tmp_path, n_cases=_sizes(request), seed=1,
-                 check=_usable)
+    fuzz(cases, write, load_project, tmp_path, n_cases=_sizes(request), check=_usable)
 
 
 def _usable(project: Project) -> None:
@@ -132,11 +157,8 @@ def _usable(project: Project) -> None:
 def test_fuzzed_skeleton_files_raise_only_gait_input_errors(tmp_path, request):
     doc = HORSE.to_dict()
 
-    def write_case(rng: random.Random, folder: Path) -> Path:
-        (folder / "s.json").write_text(mutate_json(doc, rng))
-        return folder / "s.json"
-
-    check_reader(write_case, Skeleton.from_json, tmp_path, n_cases=_sizes(request), seed=2)
+    fuzz(json_cases(doc), _write_text("s.json"), Skeleton.from_json, tmp_path,
+         n_cases=_sizes(request))
 
 
 def test_fuzzed_analysis_files_raise_only_gait_input_errors(tmp_path, request):
@@ -148,33 +170,119 @@ def test_fuzzed_analysis_files_raise_only_gait_input_errors(tmp_path, request):
            "filtered_projections": [[0.1 * i, -0.2 * i] for i in range(n)],
            "loop_angle": [0.1 * i for i in range(n)]}
 
-    def write_case(rng: random.Random, folder: Path) -> Path:
-        (folder / "analysis.json").write_text(mutate_json(doc, rng))
-        return folder / "analysis.json"
-
-    check_reader(write_case, read_analysis_json, tmp_path, n_cases=_sizes(request), seed=3)
+    fuzz(json_cases(doc), _write_text("analysis.json"), read_analysis_json, tmp_path,
+         n_cases=_sizes(request), check=_finite_record)
 
 
 def test_fuzzed_pose_tables_raise_only_gait_input_errors(tmp_path, request):
     write_pose_table(tmp_path / "good.csv", PoseTable(np.arange(4), HORSE.channel_names, POSES))
     good = (tmp_path / "good.csv").read_text()
 
-    def write_case(rng: random.Random, folder: Path) -> Path:
-        (folder / "p.csv").write_text(mutate_text(good, rng, CSV_PIECES), encoding="utf-8")
-        return folder / "p.csv"
-
-    check_reader(write_case, read_pose_table, tmp_path / "cases", n_cases=_sizes(request), seed=4)
+    fuzz(text_cases(good, CSV_PIECES), _write_text("p.csv"), read_pose_table, tmp_path / "cases",
+         n_cases=_sizes(request))
 
 
 def test_fuzzed_bvh_files_raise_only_gait_input_errors(tmp_path, request):
     write_bvh(tmp_path / "good.bvh", HORSE, PoseTable(np.arange(4), HORSE.channel_names, POSES))
     good = (tmp_path / "good.bvh").read_text()
 
-    def write_case(rng: random.Random, folder: Path) -> Path:
-        (folder / "m.bvh").write_text(mutate_text(good, rng, BVH_PIECES), encoding="utf-8")
-        return folder / "m.bvh"
+    fuzz(text_cases(good, BVH_PIECES), _write_text("m.bvh"), read_bvh, tmp_path / "cases",
+         n_cases=_sizes(request))
 
-    check_reader(write_case, read_bvh, tmp_path / "cases", n_cases=_sizes(request), seed=5)
+
+def _finite_record(record) -> None:
+    """An accepted analysis holds only finite numbers (they flow into the curves)."""
+    for name in ("projections", "filtered_projections", "loop_angle"):
+        value = getattr(record, name, None)
+        if value is not None:
+            assert np.all(np.isfinite(np.asarray(value, float))), name
+
+
+def test_fuzzed_scribbles_raise_only_gait_input_errors(tmp_path, request):
+    doc = scribbles_to_dict([Scribble([[1.5, 2.0], [30.0, 40.5]], 8.0, 0, "subject"),
+                             Scribble([[5.0, 5.0]], 3.0, 4, "background")])
+
+    def usable(scribbles) -> None:
+        for sc in scribbles:
+            assert np.all(np.isfinite(sc.points_xy)) and 0 < sc.width_px < 1e6
+
+    fuzz(json_cases(doc), _write_text("s.json"), lambda p: read_scribbles(p, n_frames=10),
+         tmp_path, n_cases=_sizes(request), check=usable)
+
+
+MANIFEST_PIECES = SPECIAL_NUMBERS + (
+    "clip,path", "summary.json,walker", "x" * 300 + ",walker", '"1,2,3,4"', '"-1,2,3,4"',
+    "../..", "/dev/zero", "walker;walker", ",,,,,,,,,,", "\x00", '"', "a\nb", "fps")
+
+
+def test_fuzzed_manifests_raise_only_gait_input_errors(tmp_path, request):
+    good = ('clip,path,box,subject,background,start,stop,fps\n'
+            'a,walker,"1,2,30,40",,,0,3,12.5\n,walker,,"1,1,5,5","0,0,2,2",,,\n')
+
+    def write(text: str, folder: Path) -> Path:
+        write_mask_folder(folder / "walker", walker_clip(4))
+        (folder / "m.csv").write_text(text, encoding="utf-8", errors="surrogateescape")
+        return folder / "m.csv"
+
+    fuzz(text_cases(good, MANIFEST_PIECES), write, read_manifest, tmp_path / "cases",
+         n_cases=_sizes(request))
+
+
+@pytest.fixture(scope="module")
+def clip_result(tmp_path_factory) -> tuple[ClipSpec, Path]:
+    """A clip analysed by a batch: its spec and its output folder."""
+    root = tmp_path_factory.mktemp("batch")
+    spec = ClipSpec("w", write_mask_folder(root / "walker", walker_clip(60)).absolute())
+    analyze_clip(spec, root / "out")
+    return spec, root / "out" / "w"
+
+
+def test_fuzzed_clip_results_make_a_re_run_run_the_clip_again(clip_result, tmp_path, request):
+    """A batch re-run reads each clip's result.json back: damage means 'run it again'."""
+    spec, folder = clip_result
+    doc = json.loads((folder / "result.json").read_text())
+
+    def write(text: str, out: Path) -> Path:
+        (out / "w").mkdir()
+        (out / "w" / "result.json").write_text(text, encoding="utf-8", errors="surrogateescape")
+        return out / "w" / "result.json"
+
+    def read(path: Path):
+        stored = finished_result(path.parent.parent, spec)
+        assert stored is None or stored.spec == spec
+        return stored
+
+    fuzz(json_cases(doc), write, read, tmp_path, n_cases=_sizes(request))
+
+
+def _summary_doc(tmp_path: Path) -> dict:
+    spec = ClipSpec("a", tmp_path / "walker", box=Rect(1, 2, 3, 4), start=2, stop=50, fps=25.0)
+    rows = [ClipSummary("a", "done", str(spec.path), spec, frames=48, usable=True,
+                        verdict="usable", period_frames=12.25, r1=0.9, r2=0.8, cycle_start=2,
+                        cycle_stop=50),
+            ClipSummary("b", "failed", "x", ClipSpec("b", Path("x")), error="cannot open"),
+            ClipSummary("line-4", "bad row", "", error="line 4: bad box")]
+    write_summary(tmp_path, rows, manifest=tmp_path / "m.csv")
+    return json.loads((tmp_path / "summary.json").read_text())
+
+
+def _summary_usable(rows) -> None:
+    for row in rows:
+        for value in (row.period_frames, row.r1, row.r2):
+            assert value is None or np.isfinite(value)
+
+
+def test_fuzzed_batch_summaries_raise_only_gait_input_errors(tmp_path, request):
+    doc = _summary_doc(tmp_path)
+    fuzz(json_cases(doc), _write_text("summary.json"), read_summary, tmp_path / "cases",
+         n_cases=_sizes(request), check=_summary_usable)
+
+
+def test_fuzzed_batch_summary_tables_raise_only_gait_input_errors(tmp_path, request):
+    _summary_doc(tmp_path)
+    good = (tmp_path / "summary.csv").read_text()
+    fuzz(text_cases(good, CSV_PIECES), _write_text("summary.csv"), read_summary,
+         tmp_path / "cases", n_cases=_sizes(request), check=_summary_usable)
 
 
 @pytest.mark.fuzz
@@ -200,3 +308,28 @@ def test_4000_fuzzed_pose_tables(tmp_path, request):
 @pytest.mark.fuzz
 def test_4000_fuzzed_bvh_files(tmp_path, request):
     test_fuzzed_bvh_files_raise_only_gait_input_errors(tmp_path, request)
+
+
+@pytest.mark.fuzz
+def test_4000_fuzzed_scribbles(tmp_path, request):
+    test_fuzzed_scribbles_raise_only_gait_input_errors(tmp_path, request)
+
+
+@pytest.mark.fuzz
+def test_4000_fuzzed_manifests(tmp_path, request):
+    test_fuzzed_manifests_raise_only_gait_input_errors(tmp_path, request)
+
+
+@pytest.mark.fuzz
+def test_4000_fuzzed_clip_results(clip_result, tmp_path, request):
+    test_fuzzed_clip_results_make_a_re_run_run_the_clip_again(clip_result, tmp_path, request)
+
+
+@pytest.mark.fuzz
+def test_4000_fuzzed_batch_summaries(tmp_path, request):
+    test_fuzzed_batch_summaries_raise_only_gait_input_errors(tmp_path, request)
+
+
+@pytest.mark.fuzz
+def test_4000_fuzzed_batch_summary_tables(tmp_path, request):
+    test_fuzzed_batch_summary_tables_raise_only_gait_input_errors(tmp_path, request)

@@ -1,0 +1,74 @@
+"""The window opening fuzzed projects and batch summaries: the project opens, or one dialog
+of one line says why; nothing escapes (issue #64).
+
+The cases are those of the readers' fuzz tests (:mod:`tests.gaitcore.test_fuzz_readers`),
+run in the process: a Qt window cannot be forked.
+"""
+
+from __future__ import annotations
+
+import json
+import random
+import shutil
+from pathlib import Path
+
+import pytest
+from hypothesis import strategies as st
+
+from gaitcore.project.storage import sidecar_dir
+from tests.app.conftest import wait_jobs
+from tests.fuzzing import DEFAULT_CASES, FUZZ_CASES, fuzz, json_cases
+from tests.gaitcore.test_fuzz_readers import _damage_array, _summary_doc, valid_project
+
+__all__ = ["valid_project"]  # the fixture, shared with the readers' fuzz test
+
+
+def _opens_or_says_why(qtbot, window, asker, open_it):
+    def read(path: Path) -> None:
+        asker.errors.clear()
+        with qtbot.capture_exceptions() as raised:
+            open_it(path)
+            wait_jobs(qtbot, window)
+        assert not raised, raised[0][1]
+        assert len(asker.errors) <= 1 and all("\n" not in e for e in asker.errors), asker.errors
+    return read
+
+
+@pytest.mark.parametrize("n_cases", [
+    DEFAULT_CASES, pytest.param(FUZZ_CASES, marks=pytest.mark.fuzz)])
+def test_fuzzed_projects_open_or_say_why(qtbot, window, asker, valid_project, tmp_path, n_cases):
+    doc = json.loads((valid_project / "p.gaitproj").read_text())
+    arrays = sorted(f.name for f in sidecar_dir(valid_project / "p.gaitproj").iterdir())
+    cases = st.one_of(
+        json_cases(doc).map(lambda text: (text, None, 0)),
+        st.tuples(st.just(json.dumps(doc)), st.sampled_from(arrays), st.integers(0, 2**32)))
+
+    def write(case, folder: Path) -> Path:
+        text, array, seed = case
+        path = folder / "p.gaitproj"
+        shutil.copytree(sidecar_dir(valid_project / "p.gaitproj"), sidecar_dir(path))
+        path.write_text(text)
+        if array is not None:
+            _damage_array(sidecar_dir(path) / array, random.Random(seed))
+        return path
+
+    fuzz(cases, write, _opens_or_says_why(qtbot, window, asker, window.open_path), tmp_path,
+         n_cases=n_cases, isolate=False)
+
+
+@pytest.mark.parametrize("n_cases", [
+    DEFAULT_CASES, pytest.param(FUZZ_CASES, marks=pytest.mark.fuzz)])
+def test_fuzzed_batch_summaries_open_or_say_why(qtbot, window, asker, tmp_path, n_cases):
+    doc = _summary_doc(tmp_path)
+
+    def write(text: str, folder: Path) -> Path:
+        (folder / "summary.json").write_text(text, encoding="utf-8", errors="surrogateescape")
+        return folder / "summary.json"
+
+    def open_summary(path: Path) -> None:
+        table = window.open_batch_summary(path)
+        if table is not None:
+            table.close()
+
+    fuzz(json_cases(doc), write, _opens_or_says_why(qtbot, window, asker, open_summary),
+         tmp_path / "cases", n_cases=n_cases, isolate=False)
