@@ -285,3 +285,15 @@ def test_a_summary_that_is_a_fifo_or_nests_deeply_is_one_error(tmp_path):
     os.mkfifo(fifo)
     with pytest.raises(GaitInputError, match="not a regular file"):
         read_summary(fifo)
+
+
+def test_a_manifest_that_is_a_pipe_or_dev_zero_is_one_error_not_a_hang(tmp_path, capsys):
+    import os
+
+    os.mkfifo(tmp_path / "m.csv")
+    (tmp_path / "zero.csv").symlink_to("/dev/zero")
+    for name in ("m.csv", "zero.csv"):
+        with pytest.raises(GaitInputError, match="not a regular file"):
+            read_manifest(tmp_path / name)
+        assert main(["batch", str(tmp_path / name), "--out", str(tmp_path / "out")]) == 2
+        assert len(capsys.readouterr().err.strip().splitlines()) == 1

@@ -25,8 +25,8 @@ ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
 pytestmark = pytest.mark.slow
 
 
-def _gaitcore(*args: str, **kwargs) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "gaitcore.cli", *args], env=ENV, cwd=ROOT,
+def _gaitcore(*args: str, cwd: Path = ROOT, **kwargs) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "gaitcore.cli", *args], env=ENV, cwd=cwd,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kwargs)
 
 
@@ -80,9 +80,14 @@ def _free_port() -> int:
 
 
 def test_batch_on_a_scheduler_and_two_workers_started_apart(tmp_path):
+    """Workers in folders of their own; the batch's --out relative to where it was started:
+    every clip lands under --out all the same."""
     from distributed import Client
 
     manifest = _walker_library(tmp_path, n_clips=4, n_frames=80)
+    homes = [tmp_path / f"worker{k}" for k in range(2)]
+    for home in homes:
+        home.mkdir()
     address = f"tcp://127.0.0.1:{_free_port()}"
     procs = [subprocess.Popen([str(DASK), "scheduler", "--host", "127.0.0.1", "--port",
                                address.rsplit(":", 1)[1], "--no-dashboard"], env=ENV,
@@ -90,17 +95,20 @@ def test_batch_on_a_scheduler_and_two_workers_started_apart(tmp_path):
     try:
         procs += [subprocess.Popen([str(DASK), "worker", address, "--nworkers", "1", "--nthreads",
                                     "1", "--no-dashboard", "--name", f"w{k}"], env=ENV,
-                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                                   cwd=homes[k], stdout=subprocess.DEVNULL,
+                                   stderr=subprocess.DEVNULL)
                   for k in range(2)]
         with Client(address, timeout=30) as client:
             client.wait_for_workers(2, timeout=60)
-        run = _gaitcore("batch", str(manifest), "--out", str(tmp_path / "out"),
-                        "--scheduler", address)
+        run = _gaitcore("batch", manifest.name, "--out", "out", "--scheduler", address,
+                        cwd=tmp_path)
         out, err = run.communicate(timeout=180)
         assert run.returncode == 0, err
         assert f"scheduler {address}: 2 worker(s)" in err
         rows = read_summary(tmp_path / "out" / "summary.csv")
         assert [r.status for r in rows] == ["done"] * 4
+        assert all((tmp_path / "out" / r.clip / "result.json").is_file() for r in rows)
+        assert not any(any(home.iterdir()) for home in homes), "a clip left --out"
         assert "4 analysed, 0 skipped" in out
     finally:
         _stop(procs[::-1])
