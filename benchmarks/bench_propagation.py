@@ -31,7 +31,6 @@ from benchmarks.bench_segmentation import CLIPS, DATA, _davis, _r
 from gaitcore.bench.scripted_user import iou, legs_iou, padded_box
 from gaitcore.silhouettes.propagate import (
     Cut,
-    PropagationSettings,
     WorkingSize,
     fuse_cut,
     key_colours,
@@ -39,6 +38,7 @@ from gaitcore.silhouettes.propagate import (
     warp_mask,
 )
 from gaitcore.silhouettes.saliency import Saliency, saliency_model
+from gaitcore.silhouettes.settings import PropagationSettings
 
 SPACING, REACH = 5, 10
 KEY_EVERY = 10

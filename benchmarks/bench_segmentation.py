@@ -45,9 +45,9 @@ from gaitcore.footage.image_folder import read_mask_folder
 from gaitcore.footage.sources import open_frames
 from gaitcore.silhouettes.annotations import Rect, Scribble
 from gaitcore.silhouettes.exposure import exposed
-from gaitcore.silhouettes.propagate import PropagationSettings
 from gaitcore.silhouettes.roto import RotoSegmentation
 from gaitcore.silhouettes.segmentation import segment_clip
+from gaitcore.silhouettes.settings import PropagationSettings
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data"

@@ -19,6 +19,7 @@ from gaitcore.silhouettes.annotations import Rect
 
 if TYPE_CHECKING:
     from gaitcore.silhouettes.roto import FrameState
+    from gaitcore.silhouettes.settings import SegmentationSettings
 
 SALIENCY_EVERY = 4
 """The default of ``--saliency-every``: ``PropagationSettings.saliency_every`` (not imported
@@ -67,26 +68,43 @@ def add_segmentation_options(p: argparse.ArgumentParser) -> None:
                    help="strokes on any frames (subject strokes on the first frame can start "
                    "without a box): {\"scribbles\": [{\"frame\": 12, \"label\": \"subject\", "
                    "\"width\": 8, \"points\": [[x, y], ...]}]}")
-    p.add_argument("--method", choices=("propagate", "gmm"), default="propagate",
+    p.add_argument("--method", choices=("propagate", "gmm"), default=None,
                    help="propagate (default: optical flow from the box, corrections both "
                    "ways) or gmm (the paper's colour mixture, rectangles only)")
-    p.add_argument("--saliency-every", type=_every, default=SALIENCY_EVERY, metavar="N",
+    p.add_argument("--saliency-every", type=_every, default=None, metavar="N",
                    help="run the salient-object network every N frames, its map carried by "
                    f"the optical flow between (default {SALIENCY_EVERY}); 1 takes about 1.7 "
                    "times as long and cuts a little better from a box alone")
+    p.add_argument("--settings", type=Path, default=None, metavar="FILE.json",
+                   help="a segmentation profile: the settings it gives replace the defaults "
+                   "(--method and --saliency-every replace its own); see --save-settings")
 
 
 def segmentation_options(args: argparse.Namespace) -> dict:
     """The keyword options of ``load_silhouettes`` given on the command line."""
     from gaitcore.io.scribbles import read_scribbles
-    from gaitcore.silhouettes.propagate import PropagationSettings
-    from gaitcore.silhouettes.segmentation import SegmentationSettings
 
     scribbles = [] if args.scribbles is None else read_scribbles(args.scribbles)
+    settings = segmentation_settings(args)
     return {"subject": args.subject, "background": args.background, "box": args.box,
-            "scribbles": scribbles, "method": args.method, "note_sink": print_note,
-            "settings": SegmentationSettings(
-                propagation=PropagationSettings(saliency_every=args.saliency_every))}
+            "scribbles": scribbles, "method": settings.method, "note_sink": print_note,
+            "settings": settings}
+
+
+def segmentation_settings(args: argparse.Namespace) -> SegmentationSettings:
+    """The profile of ``--settings`` (else the defaults), with ``--method`` and
+    ``--saliency-every`` over it."""
+    from dataclasses import replace
+
+    from gaitcore.silhouettes.settings import SegmentationSettings, read_settings
+
+    settings = SegmentationSettings() if args.settings is None else read_settings(args.settings)
+    if args.method is not None:
+        settings = replace(settings, method=args.method)
+    if args.saliency_every is not None:
+        settings = replace(settings, propagation=replace(settings.propagation,
+                                                         saliency_every=args.saliency_every))
+    return settings
 
 
 def print_note(text: str) -> None:
@@ -105,6 +123,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("input", type=Path, help="video file or image folder")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
     add_segmentation_options(p)
+    p.add_argument("--save-settings", type=Path, default=None, metavar="FILE.json",
+                   help="write the segmentation profile used (every setting) to FILE.json, "
+                   "to edit and give back with --settings")
     p.set_defaults(run=run)
 
 
@@ -125,13 +146,17 @@ def run(args: argparse.Namespace) -> int:
     """Run ``gaitcore segment``; returns the exit status."""
     from gaitcore.io.scribbles import write_segmentation_json
     from gaitcore.silhouettes.extract import is_mask_folder, load_silhouettes
+    from gaitcore.silhouettes.settings import write_settings
     from gaitcore.silhouettes.tracking import WORK_SIDE_PX
 
     if Path(args.input).is_dir() and is_mask_folder(Path(args.input)):
         raise GaitInputError(f"{args.input} already holds binary masks: nothing to segment")
     states: dict = {}
+    options = segmentation_options(args)
+    if args.save_settings is not None:
+        write_settings(args.save_settings, options["settings"])
     roi = load_silhouettes(args.input, args.out, max_side=WORK_SIDE_PX,
-                           state_sink=states.__setitem__, **segmentation_options(args))
+                           state_sink=states.__setitem__, **options)
     ordered = [states[t] for t in range(len(roi.lost))] if states else []
     if ordered:
         write_segmentation_json(args.out / "segmentation.json", ordered, source=str(args.input))

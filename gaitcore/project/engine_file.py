@@ -53,7 +53,7 @@ from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import WorkingSize
 from gaitcore.silhouettes.roto import FrameState, frames_to_check
 from gaitcore.silhouettes.roto_state import RotoState
-from gaitcore.silhouettes.segmentation import SegmentationSettings
+from gaitcore.silhouettes.settings import SegmentationSettings
 
 ENGINE_FORMAT = "gaitstudio-engine"
 ENGINE_VERSION = 7

@@ -41,12 +41,12 @@ from gaitcore.silhouettes.roto import FrameState, RotoSegmentation, frames_to_ch
 from gaitcore.silhouettes.roto_state import RotoState, restore_state, roto_state
 from gaitcore.silhouettes.segmentation import (
     RotoCollector,
-    SegmentationSettings,
     collect_roto,
     full_frame_mask,
     roto_frame,
     roto_frames,
 )
+from gaitcore.silhouettes.settings import SegmentationSettings
 from gaitcore.silhouettes.sketch import rasterize_strokes
 from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiAccumulator
 

@@ -23,8 +23,10 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 
+from gaitcore.silhouettes.settings import PropagationSettings
+
 if TYPE_CHECKING:
-    from gaitcore.silhouettes.propagate import PropagationSettings, Warp
+    from gaitcore.silhouettes.propagate import Warp
 
 
 def measurable(image: np.ndarray) -> np.ndarray:

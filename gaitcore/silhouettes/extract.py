@@ -28,7 +28,7 @@ from gaitcore.silhouettes.roto import FrameState
 from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiClip, crop_rois
 
 if TYPE_CHECKING:
-    from gaitcore.silhouettes.segmentation import SegmentationSettings
+    from gaitcore.silhouettes.settings import SegmentationSettings
 
 
 def is_mask_folder(path: Path) -> bool:

@@ -24,7 +24,8 @@ import cv2
 import numpy as np
 
 from gaitcore.silhouettes.motion import learnt_ratios
-from gaitcore.silhouettes.propagate import PropagationSettings, disk
+from gaitcore.silhouettes.propagate import disk
+from gaitcore.silhouettes.settings import PropagationSettings
 
 STILL_FRAMES = 15
 """Frames sampled evenly across a clip to tell whether its camera held still, and to learn the

@@ -23,14 +23,8 @@ import numpy as np
 
 from gaitcore.silhouettes.colour_model import colour_separation
 from gaitcore.silhouettes.motion import camera_departure
-from gaitcore.silhouettes.propagate import (
-    TOUCHING,
-    Box,
-    Cut,
-    PropagationSettings,
-    disk,
-    overlap,
-)
+from gaitcore.silhouettes.propagate import TOUCHING, Box, Cut, disk, overlap
+from gaitcore.silhouettes.settings import PropagationSettings
 from gaitcore.silhouettes.tracking import keep_overlapping
 
 _SAME_SEEDS = 0.95

@@ -58,7 +58,6 @@ from gaitcore.silhouettes.propagate import (
     TOUCHING,
     CorrectionTrack,
     Cut,
-    PropagationSettings,
     WorkingSize,
     disk,
     find_again,
@@ -70,6 +69,7 @@ from gaitcore.silhouettes.propagate import (
     window,
 )
 from gaitcore.silhouettes.saliency import SaliencyTrack, saliency_model
+from gaitcore.silhouettes.settings import PropagationSettings
 from gaitcore.silhouettes.sketch import rasterize_strokes
 from gaitcore.silhouettes.tracking import keep_overlapping
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import closing
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import cv2
 import numpy as np
@@ -27,8 +27,9 @@ from gaitcore.footage.threads import InOrder
 from gaitcore.progress import Progress, report
 from gaitcore.silhouettes.annotations import Rect, Scribble
 from gaitcore.silhouettes.colour_model import ColourModel, check_frame, rect_mask
-from gaitcore.silhouettes.propagate import PropagationSettings, disk
+from gaitcore.silhouettes.propagate import disk
 from gaitcore.silhouettes.roto import FrameState, RotoSegmentation
+from gaitcore.silhouettes.settings import SegmentationSettings
 from gaitcore.silhouettes.tracking import (
     WORK_SIDE_PX,
     RoiAccumulator,
@@ -38,42 +39,6 @@ from gaitcore.silhouettes.tracking import (
 )
 
 MaskSink = Callable[[int, np.ndarray], None]
-METHODS = ("gmm", "propagate")
-
-
-@dataclass(frozen=True)
-class SegmentationSettings:
-    """Options of :func:`segment_clip`.
-
-    Attributes
-    ----------
-    method : {"propagate", "gmm"}
-        See the module docstring.
-    n_components : int
-        Gaussians per colour model (``"gmm"``).
-    lut_bits : int
-        Quantization of each BGR channel in the posterior table (``"gmm"``).
-    min_area_frac : float
-        Components smaller than this fraction of the frame are noise (``"gmm"``).
-    propagation : PropagationSettings
-        Options of ``"propagate"``.
-    """
-
-    method: str = "propagate"
-    n_components: int = 5
-    lut_bits: int = 5
-    min_area_frac: float = 1e-3
-    propagation: PropagationSettings = field(default_factory=PropagationSettings)
-
-    def __post_init__(self) -> None:
-        if self.method not in METHODS:
-            raise GaitInputError(
-                f"unknown segmentation method {self.method!r}: use one of {METHODS}"
-            )
-        if not 4 <= self.lut_bits <= 7 or self.n_components < 1:
-            raise GaitInputError(f"segmentation settings out of range (lut_bits={self.lut_bits}, "
-                                 f"n_components={self.n_components}): use lut_bits 4..7 and "
-                                 "n_components >= 1")
 
 
 def _gmm_masks(frames: Iterable[np.ndarray], subject_rects: Sequence[Rect],

@@ -333,3 +333,16 @@ def test_4000_fuzzed_batch_summaries(tmp_path, request):
 @pytest.mark.fuzz
 def test_4000_fuzzed_batch_summary_tables(tmp_path, request):
     test_fuzzed_batch_summary_tables_raise_only_gait_input_errors(tmp_path, request)
+
+
+@pytest.mark.parametrize("n_cases", [
+    DEFAULT_CASES, pytest.param(FUZZ_CASES, marks=pytest.mark.fuzz)])
+def test_fuzzed_segmentation_profiles_raise_only_gait_input_errors(tmp_path, n_cases):
+    from gaitcore.silhouettes.settings import (
+        SegmentationSettings,
+        read_settings,
+        settings_to_dict,
+    )
+
+    fuzz(json_cases(settings_to_dict(SegmentationSettings())), _write_text("p.json"),
+         read_settings, tmp_path, n_cases=n_cases)

@@ -24,15 +24,10 @@ from gaitcore.errors import GaitInputError
 from gaitcore.io.scribbles import read_scribbles, scribbles_from_dict, write_scribbles
 from gaitcore.progress import Cancelled
 from gaitcore.silhouettes.annotations import Rect, Scribble
-from gaitcore.silhouettes.propagate import (
-    Cut,
-    PropagationSettings,
-    WorkingSize,
-    disk,
-    overlap,
-)
+from gaitcore.silhouettes.propagate import Cut, WorkingSize, disk, overlap
 from gaitcore.silhouettes.roto import RotoSegmentation
-from gaitcore.silhouettes.segmentation import SegmentationSettings, segment_clip
+from gaitcore.silhouettes.segmentation import segment_clip
+from gaitcore.silhouettes.settings import PropagationSettings, SegmentationSettings
 from tests.gaitcore.test_segmentation import scene
 
 
@@ -384,7 +379,7 @@ def test_strokes_that_lowered_the_clip_are_counted():
 
 
 def test_the_scripted_user_improves_a_wrong_start(without_saliency):
-    from gaitcore.silhouettes.propagate import PropagationSettings
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     frames, truth = scene(10)
     # A box around the body only: the legs are outside it on frame 0. The camera holds
@@ -707,7 +702,8 @@ def test_a_part_carried_away_from_the_body_is_dropped_and_a_split_leg_kept():
     shadow line and a subject-coloured patch far from the body (background a first cut took):
     the patch goes, the leg stays."""
     from gaitcore.silhouettes.colour_model import learn_colours
-    from gaitcore.silhouettes.propagate import PropagationSettings, fuse_cut
+    from gaitcore.silhouettes.propagate import fuse_cut
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     rng = np.random.default_rng(3)
     image = np.clip(rng.normal([60, 140, 70], 8, (120, 160, 3)), 0, 255).astype(np.uint8)
@@ -730,7 +726,8 @@ def test_a_part_carried_away_from_the_body_is_dropped_and_a_split_leg_kept():
 def test_the_flow_is_trusted_where_the_warped_frame_matches():
     """A textured frame moved 3 pixels right, with one patch replaced by other texture (an
     occlusion): the flow is trusted where the moved texture matches, not on the patch."""
-    from gaitcore.silhouettes.propagate import PropagationSettings, make_flow, warp_mask
+    from gaitcore.silhouettes.propagate import make_flow, warp_mask
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     rng = np.random.default_rng(5)
     before = cv2.GaussianBlur(rng.integers(0, 255, (140, 180), np.uint8), (0, 0), 1.5)
@@ -752,7 +749,8 @@ def test_a_thin_leg_the_flow_carried_survives_an_ambiguous_colour():
     warped mask keeps it; where it is not (the blurred prior of before this rule), colour and
     blur give it away."""
     from gaitcore.silhouettes.colour_model import learn_colours
-    from gaitcore.silhouettes.propagate import PropagationSettings, fuse_cut
+    from gaitcore.silhouettes.propagate import fuse_cut
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     rng = np.random.default_rng(4)
     green, brown = np.array([60, 140, 70]), np.array([40, 80, 160])
@@ -780,7 +778,8 @@ def test_a_mask_that_no_longer_stands_out_from_its_surroundings_is_lost():
     and tree trunks at a confidence of 0.8 to 0.9): the frame is lost, not kept. On the key
     frame itself, and on one whose colours merely darkened, the mask is kept."""
     from gaitcore.silhouettes.colour_model import colour_gap, learn_colours
-    from gaitcore.silhouettes.propagate import PropagationSettings, fuse_cut
+    from gaitcore.silhouettes.propagate import fuse_cut
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     rng = np.random.default_rng(7)
     green, brown = np.array([60, 140, 70]), np.array([40, 80, 160])
@@ -808,7 +807,8 @@ def test_confidence_falls_as_the_subject_stands_out_less_though_the_cut_holds_it
     confidence before) read 1 on each; how far the mask stands out under the key's colours
     falls, and so does the confidence, which tells the artist which frames to look at."""
     from gaitcore.silhouettes.colour_model import learn_colours
-    from gaitcore.silhouettes.propagate import PropagationSettings, fuse_cut
+    from gaitcore.silhouettes.propagate import fuse_cut
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     rng = np.random.default_rng(7)
     green, brown = np.array([60, 140, 70]), np.array([40, 80, 160])
@@ -946,7 +946,8 @@ def test_what_moves_unlike_the_ground_is_told_from_it_where_colour_cannot():
     animal than colour alone. When everything moves alike the cue says nothing."""
     from gaitcore.silhouettes.colour_model import learn_colours
     from gaitcore.silhouettes.motion import motion_ratios
-    from gaitcore.silhouettes.propagate import PropagationSettings, fuse_cut, overlap
+    from gaitcore.silhouettes.propagate import fuse_cut, overlap
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     rng = np.random.default_rng(5)
     image = cv2.GaussianBlur(rng.integers(100, 140, (120, 160, 3)).astype(np.uint8), (0, 0), 1)
@@ -1025,7 +1026,7 @@ def test_the_whole_box_is_cut_only_when_no_motion_seeded_cut_spans_it(monkeypatc
     and it was one more GrabCut of a second on the first frame. It is cut only when no seeded
     cut spans its box, and the subject is found either way."""
     from gaitcore.silhouettes import keyframe
-    from gaitcore.silhouettes.propagate import PropagationSettings
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     rng = np.random.default_rng(3)
     green, brown = np.array([60, 140, 70]), np.array([40, 80, 160])
@@ -1074,7 +1075,7 @@ def test_a_first_cut_keeps_the_part_motion_found_when_the_whole_box_finds_nothin
     (IoU 0.000). The motion had found her dress, though not her legs: that cut, kept, lets
     the clip read 0.825."""
     from gaitcore.silhouettes import keyframe
-    from gaitcore.silhouettes.propagate import PropagationSettings
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     img, box, body = _crowd(200)
     residual = np.where(body > 0, 3.0, 0.0).astype(np.float32)
@@ -1259,7 +1260,8 @@ def test_the_warp_measures_a_change_of_exposure_and_trusts_the_flow_through_it()
     """A textured frame moved 3 pixels right and lit 1.3 times: the warp tells the change of
     exposure, and the flow is still trusted on the moved texture (compared without the change,
     every pixel would differ by a third of its level)."""
-    from gaitcore.silhouettes.propagate import PropagationSettings, make_flow, warp_mask
+    from gaitcore.silhouettes.propagate import make_flow, warp_mask
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     rng = np.random.default_rng(5)
     before = cv2.GaussianBlur(rng.integers(40, 180, (140, 180), np.uint8), (0, 0), 1.5)
@@ -1278,7 +1280,8 @@ def test_the_warp_measures_a_change_of_colour_balance():
     """A textured colour frame moved 3 pixels right, its blue times 0.9 and its red times
     1.1 (a camera's white balance drifting warmer): the warp tells each channel's log ratio
     less their mean, zeros when the balance held or the colours were not given."""
-    from gaitcore.silhouettes.propagate import PropagationSettings, make_flow, warp_mask
+    from gaitcore.silhouettes.propagate import make_flow, warp_mask
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     rng = np.random.default_rng(5)
     before = cv2.GaussianBlur(rng.integers(50, 190, (140, 180, 3), np.uint8), (0, 0), 1.5)
@@ -1306,7 +1309,7 @@ def test_the_ratios_and_levels_counted_are_numpys_medians(channels):
     themselves): on pairs with a change of exposure, odd and even counts and levels at 0, they
     are ``np.median``'s of the log ratios and levels, to the bit."""
     from gaitcore.silhouettes.exposure import _levels, _log_ratios
-    from gaitcore.silhouettes.propagate import PropagationSettings
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     settings = PropagationSettings()
     rng = np.random.default_rng(channels)
@@ -1354,7 +1357,8 @@ def test_the_exposure_followed_along_a_pass_neither_drifts_nor_matches_small_cha
     followed exposure stays within the slack, so nothing is matched (not pulled, it
     drifts). A frame lit 1.5 times (its background too) is matched, less the slack."""
     from gaitcore.silhouettes.exposure import ExposureTrack
-    from gaitcore.silhouettes.propagate import PropagationSettings, Warp, window
+    from gaitcore.silhouettes.propagate import Warp, window
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     rng = np.random.default_rng(2)
     grey = rng.integers(60, 200, (120, 160)).astype(np.uint8)
@@ -1391,7 +1395,8 @@ def test_the_colour_balance_followed_along_a_pass_neither_drifts_nor_is_left_unm
     background too) is matched on each channel, less the slack, and its exposure is left
     alone."""
     from gaitcore.silhouettes.exposure import ExposureTrack, balance_level
-    from gaitcore.silhouettes.propagate import PropagationSettings, Warp, window
+    from gaitcore.silhouettes.propagate import Warp, window
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     rng = np.random.default_rng(2)
     colour = rng.integers(60, 200, (120, 160, 3)).astype(np.uint8)
@@ -1494,7 +1499,7 @@ def test_a_still_camera_tells_an_animal_of_the_grounds_colours_from_the_ground(
     its own colours better than by motion and the warped mask alone (measured without the
     salient-object network, which finds part of them too: 0.81 against 0.66 with it). A
     panning camera is not taken for a still one."""
-    from gaitcore.silhouettes.propagate import PropagationSettings
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     frames, masks = _ground_coloured_walker(0.0)
     box = padded_box(masks[0], 0.1)
@@ -1517,7 +1522,7 @@ def test_a_panning_camera_tells_an_animal_of_the_grounds_colours_from_the_ground
     motion, show the ground behind the animal: the one just uncovered behind it, and the one
     it steps onto (measured without the salient-object network, which finds part of it too:
     0.64 against 0.51 with it)."""
-    from gaitcore.silhouettes.propagate import PropagationSettings
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     frames, masks = _ground_coloured_walker(3.0)
     box = padded_box(masks[0], 0.1)
@@ -1560,7 +1565,8 @@ def test_a_stroke_teaches_its_key_frames_colours_beyond_the_mask_it_left():
     alone they call it subject."""
     from dataclasses import replace
 
-    from gaitcore.silhouettes.propagate import PropagationSettings, key_colours
+    from gaitcore.silhouettes.propagate import key_colours
+    from gaitcore.silhouettes.settings import PropagationSettings
 
     rng = np.random.default_rng(11)
     image = np.clip(rng.normal([90, 150, 170], 8, (120, 160, 3)), 0, 255).astype(np.uint8)
@@ -1599,3 +1605,64 @@ def test_the_nearby_grounds_difference_is_the_median_of_the_frames_that_saw_it()
     expected = np.take_along_axis(values, ((np.maximum(count, 1) - 1) // 2)[None], 0)[0]
     assert np.array_equal(middle[count > 0], expected[count > 0])
     assert (middle[count == 0] == 255).all()
+
+
+def test_a_segmentation_profile_round_trips_and_names_what_is_wrong(tmp_path):
+    import json
+
+    from gaitcore.errors import GaitInputError
+    from gaitcore.silhouettes.settings import (
+        SegmentationSettings,
+        read_settings,
+        write_settings,
+    )
+
+    custom = SegmentationSettings(method="gmm", propagation=PropagationSettings(
+        saliency_every=2, motion_offsets=(1, 2), match_exposure=False, motion_weight=0.5))
+    write_settings(tmp_path / "p.json", custom)
+    assert read_settings(tmp_path / "p.json") == custom
+    (tmp_path / "some.json").write_text(json.dumps(
+        {"format": "gaitstudio-segmentation", "version": 1, "propagation": {"lost_gap": 0.5}}))
+    assert read_settings(tmp_path / "some.json") == SegmentationSettings(
+        propagation=PropagationSettings(lost_gap=0.5))  # the rest keeps its defaults
+    for bad, says in (({"propagation": {"lost_gapp": 0.5}}, "unknown setting 'lost_gapp'"),
+                      ({"propagation": {"saliency_every": 0}}, "saliency_every=0"),
+                      ({"propagation": {"motion_weight": "x"}}, "propagation.motion_weight"),
+                      ({"method": "magic"}, "unknown segmentation method"),
+                      ({"version": 9}, "newer")):
+        doc = {"format": "gaitstudio-segmentation", "version": 1, **bad}
+        (tmp_path / "bad.json").write_text(json.dumps(doc))
+        with pytest.raises(GaitInputError, match=says):
+            read_settings(tmp_path / "bad.json")
+
+
+def test_segment_command_saves_its_profile_and_reads_one_back(tmp_path, monkeypatch):
+    """The profile's settings reach the engine; --saliency-every is over the profile's."""
+    import json
+
+    import gaitcore.silhouettes.roto as roto
+
+    asked: list[int] = []
+
+    class Recorded(roto.SaliencyTrack):
+        def __init__(self, model, every):
+            asked.append(every)
+            super().__init__(model, every)
+
+    monkeypatch.setattr(roto, "SaliencyTrack", Recorded)
+    frames, truth = scene(4)
+    clip = _write_clip(tmp_path / "clip", frames)
+    b = padded_box(truth[0])
+    box = ["--box", f"{b.x},{b.y},{b.w},{b.h}"]
+    assert main(["segment", str(clip), "--out", str(tmp_path / "a"), *box, "--save-settings",
+                 str(tmp_path / "p.json")]) == 0
+    doc = json.loads((tmp_path / "p.json").read_text())
+    assert doc["propagation"]["saliency_every"] == PropagationSettings().saliency_every
+    doc["propagation"]["saliency_every"] = 3
+    (tmp_path / "p.json").write_text(json.dumps(doc))
+    for extra, expected in (([], 3), (["--saliency-every", "2"], 2)):
+        asked.clear()
+        assert main(["segment", str(clip), "--out", str(tmp_path / "b"), *box, "--settings",
+                     str(tmp_path / "p.json"), *extra]) == 0
+        if roto.saliency_model() is not None:
+            assert asked and set(asked) == {expected}
