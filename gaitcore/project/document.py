@@ -29,6 +29,7 @@ from gaitcore.io.motion import AUTO
 from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
 from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
+from gaitcore.silhouettes.settings import SegmentationSettings
 from gaitcore.silhouettes.tracking import RoiClip
 
 ORIGINS = ("segmented", "sketched", "masks")
@@ -235,6 +236,8 @@ class Project:
     proportions : RigProportions
         Per-part length scales of the rig (legs, neck, body, head, tail): the rig is posed
         and exported in these proportions (:func:`gaitcore.rig.proportions.proportioned`).
+    segmentation : SegmentationSettings
+        The profile the clip is segmented with, in the app, the command and a batch alike.
     """
 
     footage: Path | None = None
@@ -254,6 +257,7 @@ class Project:
     animation: AnimationOptions = field(default_factory=AnimationOptions)
     footage_fit: FootageFit = field(default_factory=FootageFit)
     proportions: RigProportions = field(default_factory=RigProportions)
+    segmentation: SegmentationSettings = field(default_factory=SegmentationSettings)
 
     def __post_init__(self) -> None:
         if self.footage is not None:

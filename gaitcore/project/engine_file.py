@@ -36,7 +36,6 @@ import hashlib
 import os
 import re
 from collections.abc import Callable
-from dataclasses import asdict
 from pathlib import Path
 from typing import TypeVar
 
@@ -53,7 +52,6 @@ from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import WorkingSize
 from gaitcore.silhouettes.roto import FrameState, frames_to_check
 from gaitcore.silhouettes.roto_state import RotoState
-from gaitcore.silhouettes.settings import SegmentationSettings
 
 ENGINE_FORMAT = "gaitstudio-engine"
 ENGINE_VERSION = 7
@@ -74,8 +72,8 @@ _ENGINE_ARRAY = re.compile(r"^engine-(table|bits|still|states)-[0-9a-f]{16}\.npy
 def engine_fingerprint(project: Project) -> str:
     """A hash of what ``project``'s segmentation engine depends on: its
     :func:`~gaitcore.project.roto_session.segmentation_key` (the footage path resolved, with
-    the file's size and modification time, so that a replaced clip does not match), the
-    propagation settings and :data:`ENGINE_VERSION`."""
+    the file's size and modification time, so that a replaced clip does not match), which
+    holds the settings, and :data:`ENGINE_VERSION`."""
     footage, stat = project.footage, None
     if footage is not None:
         try:
@@ -84,8 +82,7 @@ def engine_fingerprint(project: Project) -> str:
         except OSError:
             pass
         footage = footage.resolve()
-    text = repr((ENGINE_VERSION, str(footage), stat, segmentation_key(project)[1:],
-                 asdict(SegmentationSettings().propagation)))
+    text = repr((ENGINE_VERSION, str(footage), stat, segmentation_key(project)[1:]))
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 

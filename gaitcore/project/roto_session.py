@@ -46,7 +46,6 @@ from gaitcore.silhouettes.segmentation import (
     roto_frame,
     roto_frames,
 )
-from gaitcore.silhouettes.settings import SegmentationSettings
 from gaitcore.silhouettes.sketch import rasterize_strokes
 from gaitcore.silhouettes.tracking import WORK_SIDE_PX, RoiAccumulator
 
@@ -59,10 +58,10 @@ ROI_MARGIN = 0.05
 
 
 def segmentation_key(project: Project) -> tuple:
-    """What the segmentation of ``project`` depends on: footage, box, rectangles and brush
-    strokes in painting order (two projects with equal keys segment alike)."""
+    """What the segmentation of ``project`` depends on: footage, box, rectangles, brush
+    strokes in painting order and the settings (two projects with equal keys segment alike)."""
     return (project.footage, project.box, project.subject_rects, project.background_rects,
-            tuple(_scribble_key(sc) for sc in project.scribbles))
+            tuple(_scribble_key(sc) for sc in project.scribbles), project.segmentation)
 
 
 def _scribble_key(sc: Scribble) -> tuple:
@@ -384,7 +383,7 @@ def preview_first_frame(source: FrameSource, project: Project,
         Nothing to start from, or bad input.
     """
     check_segmentation_input(project)
-    offsets = SegmentationSettings().propagation.motion_offsets
+    offsets = project.segmentation.propagation.motion_offsets
     n = min(len(source), 1 + max((*offsets, 0)))
     frames = [source.frame(t) for t in range(n)]
     report(progress, 1, 2, "first-frame cut-out cancelled")
@@ -406,7 +405,7 @@ def _engine(frames, project: Project, scribbles: Sequence[Scribble]) -> RotoSegm
     rects = ((), ()) if project.box else (project.subject_rects, project.background_rects)
     return RotoSegmentation(frames, box=project.box, subject_rects=rects[0],
                             background_rects=rects[1], scribbles=scribbles,
-                            settings=SegmentationSettings().propagation)
+                            settings=project.segmentation.propagation)
 
 
 def sketch_as_scribbles(strokes: Sequence[Stroke], shape: tuple[int, int], *,

@@ -104,7 +104,7 @@ def segment(source: FrameSource, project: Project, progress: Progress | None = N
     check_segmentation_input(project, box)
     rects = () if box is not None else (project.subject_rects, project.background_rects)
     roi = segment_clip(source, *rects, box=box, scribbles=project.scribbles, progress=progress,
-                       mask_sink=mask_sink, max_side=WORK_SIDE_PX)
+                       settings=project.segmentation, mask_sink=mask_sink, max_side=WORK_SIDE_PX)
     return Silhouettes(roi, "segmented")
 
 

@@ -33,6 +33,11 @@ from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
 from gaitcore.schema import MAX_FPS, JsonValue, check_path, dump_json, read_json, read_npy
 from gaitcore.silhouettes.annotations import SCRIBBLE_LABELS, Rect, Scribble, Stroke
+from gaitcore.silhouettes.settings import (
+    SegmentationSettings,
+    settings_from_dict,
+    settings_to_dict,
+)
 from gaitcore.silhouettes.tracking import RoiClip
 
 FORMAT = "gaitstudio-project"
@@ -189,6 +194,7 @@ def _to_json(project: Project, base: Path, side: Path) -> dict:
         "animation": asdict(project.animation),
         "footage_fit": asdict(project.footage_fit),
         "proportions": asdict(project.proportions),
+        "segmentation": settings_to_dict(project.segmentation),
     }
 
 
@@ -217,6 +223,8 @@ def _from_json(doc: JsonValue, p: Path) -> Project:
         animation=_options(AnimationOptions, doc.key("animation", {})),
         footage_fit=_options(FootageFit, doc.key("footage_fit", {})),
         proportions=_options(RigProportions, doc.key("proportions", {})),
+        segmentation=(settings_from_dict(doc.key("segmentation")) if doc.has("segmentation")
+                      else SegmentationSettings()),
     )
 
 

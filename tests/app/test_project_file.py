@@ -23,6 +23,7 @@ from gaitcore.project.storage import (
 )
 from gaitcore.rig.proportions import RigProportions
 from gaitcore.silhouettes.annotations import Rect, Stroke
+from gaitcore.silhouettes.settings import PropagationSettings, SegmentationSettings
 from gaitcore.silhouettes.tracking import RoiClip
 
 
@@ -42,6 +43,7 @@ def make_project(footage) -> Project:
         animation=AnimationOptions(filtered=True, loop=True),
         footage_fit=FootageFit(scale=1.25, offset_x_m=-0.1, offset_y_m=0.05, flip=True),
         proportions=RigProportions(legs=1.15, neck=0.85, tail=0.9),
+        segmentation=SegmentationSettings(propagation=PropagationSettings(saliency_every=2)),
     )
 
 
@@ -54,6 +56,10 @@ def test_round_trip_gives_the_same_project(tmp_path):
     doc = json.loads((tmp_path / "p.gaitproj").read_text())
     assert doc["format"] == "gaitstudio-project" and doc["version"] == VERSION
     assert doc["footage"]["relative"] == "clip"
+    assert doc["segmentation"]["propagation"]["saliency_every"] == 2
+    del doc["segmentation"]  # a project of an earlier version: the default profile
+    (tmp_path / "p.gaitproj").write_text(json.dumps(doc))
+    assert load_project(tmp_path / "p.gaitproj").segmentation == SegmentationSettings()
 
 
 def test_a_project_moved_with_its_footage_still_finds_it(tmp_path):

@@ -36,6 +36,30 @@ def test_session_segments_as_the_project_step(scene_images):
         assert RotoSession.start(source, project).silhouettes() == segment(source, project)
 
 
+def test_the_session_and_the_step_segment_with_the_project_s_profile(scene_images,
+                                                                     monkeypatch):
+    """One profile for the app's engine and the command's step: the project's."""
+    from dataclasses import replace
+
+    import gaitcore.silhouettes.roto as roto
+    from gaitcore.silhouettes.settings import PropagationSettings, SegmentationSettings
+
+    asked: list[int] = []
+
+    class Recorded(roto.SaliencyTrack):
+        def __init__(self, model, every):
+            asked.append(every)
+            super().__init__(model, every)
+
+    monkeypatch.setattr(roto, "SaliencyTrack", Recorded)
+    project = replace(_project(scene_images), segmentation=SegmentationSettings(
+        propagation=PropagationSettings(saliency_every=3)))
+    with open_frames(scene_images[0]) as source:
+        assert RotoSession.start(source, project).silhouettes() == segment(source, project)
+    if roto.saliency_model() is not None:
+        assert asked and set(asked) == {3}
+
+
 def test_a_correction_changes_only_its_range_and_undo_finds_the_older_state(scene_images):
     project = _project(scene_images)
     with open_frames(scene_images[0]) as source:
