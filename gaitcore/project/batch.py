@@ -40,6 +40,7 @@ from gaitcore.project.steps import analyze, open_source, segment, silhouettes_fr
 from gaitcore.project.storage import save_project, write_atomic
 from gaitcore.schema import MiB, describe, dump_json, parse_json, read_json, read_text
 from gaitcore.silhouettes.extract import is_mask_folder
+from gaitcore.silhouettes.settings import SegmentationSettings, settings_to_dict
 
 PROJECT_NAME = "clip.gaitproj"
 ANALYSIS_NAME = "analysis.json"
@@ -175,7 +176,8 @@ def pending(spec: ClipSpec) -> ClipSummary:
 
 
 def analyze_clip(spec: ClipSpec, out_dir: Path, *,
-                 settings: AnalysisSettings = AnalysisSettings()) -> ClipSummary:
+                 settings: AnalysisSettings = AnalysisSettings(),
+                 segmentation: SegmentationSettings = SegmentationSettings()) -> ClipSummary:
     """Analyse one clip and write its outputs to ``out_dir/<clip>/`` atomically.
 
     Parameters
@@ -186,6 +188,8 @@ def analyze_clip(spec: ClipSpec, out_dir: Path, *,
         The batch's output folder.
     settings : AnalysisSettings
         As ``gaitcore analyze`` takes them.
+    segmentation : SegmentationSettings
+        The profile colour footage is segmented with (kept in the clip's project and result).
 
     Returns
     -------
@@ -204,7 +208,7 @@ def analyze_clip(spec: ClipSpec, out_dir: Path, *,
     try:
         project = Project(footage=spec.path, frame_start=spec.start, frame_stop=spec.stop,
                           fps=spec.fps, box=spec.box, subject_rects=spec.subject,
-                          background_rects=spec.background)
+                          background_rects=spec.background, segmentation=segmentation)
         try:
             project = replace(project, silhouettes=_silhouettes(spec, project))
             analysis = analyze(project.silhouettes, settings, trim=project.trim)
@@ -214,7 +218,8 @@ def analyze_clip(spec: ClipSpec, out_dir: Path, *,
             summary = failed(spec, exc)
         save_project(project, tmp / PROJECT_NAME)
         _write_json(tmp / RESULT_NAME, {"format": CLIP_FORMAT, "version": VERSION,
-                                        "clip": summary.to_row()})
+                                        "clip": summary.to_row(),
+                                        "segmentation": settings_to_dict(segmentation)})
         _publish(tmp, out_dir / spec.clip)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -232,12 +237,15 @@ def failed(spec: ClipSpec, exc: BaseException) -> ClipSummary:
                        error=(text.splitlines() or [type(exc).__name__])[0])
 
 
-def finished_result(out_dir: Path, spec: ClipSpec) -> ClipSummary | None:
+def finished_result(out_dir: Path, spec: ClipSpec,
+                    segmentation: SegmentationSettings = SegmentationSettings(),
+                    ) -> ClipSummary | None:
     """The stored row of a clip already analysed for this very manifest row, else None.
 
     A clip counts as finished when its folder holds a ``result.json`` whose status is
-    ``done`` and whose manifest row equals ``spec`` (a changed box or trim runs again; so
-    does a failed clip, whose file may have been fixed since).
+    ``done``, whose manifest row equals ``spec`` and whose segmentation profile is
+    ``segmentation`` (a changed box, trim or profile runs again; so does a failed clip,
+    whose file may have been fixed since).
     """
     try:
         data = read_json(Path(out_dir) / spec.clip / RESULT_NAME, what="clip result",
@@ -246,6 +254,8 @@ def finished_result(out_dir: Path, spec: ClipSpec) -> ClipSummary | None:
                 or data.get("version") != VERSION):
             return None
         stored = ClipSummary.from_row(data.get("clip"))
+        if data.get("segmentation") != settings_to_dict(segmentation):
+            return None
     except GaitInputError:  # missing, damaged or not a regular file: the clip runs again
         return None
     if stored.status != "done" or stored.spec != spec:

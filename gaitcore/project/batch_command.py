@@ -36,6 +36,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="a running Dask scheduler (tcp://host:8786); default: a local cluster")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="worker processes of the local cluster (default: one per core)")
+    p.add_argument("--settings", type=Path, default=None, metavar="FILE.json",
+                   help="the segmentation profile of every clip ('gaitcore segment "
+                   "--save-settings' writes one); clips done with another run again")
     p.set_defaults(run=run)
 
 
@@ -43,11 +46,14 @@ def run(args: argparse.Namespace) -> int:
     """Run the batch; returns the exit status."""
     from gaitcore.project.batch_run import run_batch
     from gaitcore.project.manifest import read_manifest
+    from gaitcore.silhouettes.settings import SegmentationSettings, read_settings
 
     if args.workers is not None and args.workers < 1:
         raise GaitInputError(f"--workers must be at least 1, got {args.workers}")
     if args.workers is not None and args.scheduler:
         raise GaitInputError("--workers sizes the local cluster: leave it out with --scheduler")
+    segmentation = (SegmentationSettings() if args.settings is None
+                    else read_settings(args.settings))
     manifest = read_manifest(args.manifest)
     for problem in manifest.problems:
         print(f"gaitcore: {args.manifest} {problem}", file=sys.stderr)
@@ -56,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
                              "run: fix the rows reported above")
     bar = TerminalBar(sys.stderr)
     result = run_batch(manifest, args.out, scheduler=args.scheduler, workers=args.workers,
-                       progress=bar.update, notify=bar.line)
+                       segmentation=segmentation, progress=bar.update, notify=bar.line)
     bar.close()
     counts = Counter(row.verdict if row.status == "done" else row.status for row in result.rows)
     parts = ", ".join(f"{n} {what}" for what, n in sorted(counts.items()))

@@ -36,6 +36,10 @@ from gaitcore.project.batch import (
     write_summary,
 )
 from gaitcore.project.manifest import LOCK_NAME, ClipSpec, Manifest
+from gaitcore.silhouettes.settings import SegmentationSettings
+
+_Settings = tuple[AnalysisSettings, SegmentationSettings]
+"""What every clip of a batch is analysed and segmented with."""
 
 SUMMARY_EVERY_S = 1.0
 """Shortest interval between two rewrites of the summary while results arrive."""
@@ -71,6 +75,7 @@ def default_workers() -> int:
 
 def run_batch(manifest: Manifest, out_dir: Path, *, scheduler: str | None = None,
               workers: int | None = None, settings: AnalysisSettings = AnalysisSettings(),
+              segmentation: SegmentationSettings = SegmentationSettings(),
               progress: Progress | None = None,
               notify: Callable[[str], None] | None = None) -> BatchResult:
     """Analyse every clip of ``manifest`` into ``out_dir`` on Dask.
@@ -87,6 +92,8 @@ def run_batch(manifest: Manifest, out_dir: Path, *, scheduler: str | None = None
         Worker processes of the local cluster (default: :func:`default_workers`, and never
         more than the clips to run).
     settings : AnalysisSettings
+    segmentation : SegmentationSettings
+        The profile colour footage is segmented with; a clip done with another runs again.
     progress : callable(done, total) -> bool, optional
         Called as clips finish (skipped ones count as done); False cancels.
     notify : callable(str), optional
@@ -106,7 +113,8 @@ def run_batch(manifest: Manifest, out_dir: Path, *, scheduler: str | None = None
     except OSError as exc:
         raise GaitInputError(f"cannot create the output folder {out_dir}: {exc.strerror}") from None
     with batch_lock(out_dir):
-        return _run_locked(manifest, out_dir, scheduler, workers, settings, progress, say)
+        return _run_locked(manifest, out_dir, scheduler, workers, (settings, segmentation),
+                           progress, say)
 
 
 @contextmanager
@@ -128,11 +136,13 @@ def batch_lock(out_dir: Path) -> Iterator[None]:
 
 
 def _run_locked(manifest: Manifest, out_dir: Path, scheduler: str | None, workers: int | None,
-                settings: AnalysisSettings, progress: Progress | None,
+                settings: _Settings, progress: Progress | None,
                 say: Callable[[str], None]) -> BatchResult:
     """:func:`run_batch` once the output folder is locked."""
     remove_partial_folders(out_dir)
-    rows = {spec.clip: finished_result(out_dir, spec) or pending(spec) for spec in manifest.clips}
+    segmentation = settings[1]
+    rows = {spec.clip: finished_result(out_dir, spec, segmentation) or pending(spec)
+            for spec in manifest.clips}
     todo = [spec for spec in manifest.clips if rows[spec.clip].status == "pending"]
     skipped = len(rows) - len(todo)
     summary = _Summary(out_dir, manifest, rows)
@@ -148,12 +158,13 @@ def _run_locked(manifest: Manifest, out_dir: Path, scheduler: str | None, worker
         finally:  # after the workers stopped: a folder completed meanwhile counts as done
             for spec in todo:
                 if summary.status(spec.clip) == "pending":
-                    summary.set(finished_result(out_dir, spec) or pending(spec), write=False)
+                    summary.set(finished_result(out_dir, spec, segmentation) or pending(spec),
+                                write=False)
             summary.write()
     return BatchResult(summary.rows(), len(todo), skipped)
 
 
-def _run_tasks(client, todo: list[ClipSpec], out_dir: Path, settings: AnalysisSettings,
+def _run_tasks(client, todo: list[ClipSpec], out_dir: Path, settings: _Settings,
                summary: _Summary, progress: Progress | None, say: Callable[[str], None],
                done: int) -> None:
     """Submit one task per clip and record each result as it arrives."""
@@ -175,12 +186,12 @@ def _run_tasks(client, todo: list[ClipSpec], out_dir: Path, settings: AnalysisSe
         client.cancel(list(futures))
 
 
-def _task(spec: ClipSpec, out_dir: Path, settings: AnalysisSettings) -> ClipSummary:
+def _task(spec: ClipSpec, out_dir: Path, settings: _Settings) -> ClipSummary:
     """What a worker runs: one clip on one core (Dask, not OpenCV, spreads the work)."""
     import cv2
 
     cv2.setNumThreads(1)
-    return analyze_clip(spec, out_dir, settings=settings)
+    return analyze_clip(spec, out_dir, settings=settings[0], segmentation=settings[1])
 
 
 def _outcome(row: ClipSummary) -> str:

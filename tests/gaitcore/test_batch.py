@@ -297,3 +297,23 @@ def test_a_manifest_that_is_a_pipe_or_dev_zero_is_one_error_not_a_hang(tmp_path,
             read_manifest(tmp_path / name)
         assert main(["batch", str(tmp_path / name), "--out", str(tmp_path / "out")]) == 2
         assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_a_clip_done_with_another_segmentation_profile_runs_again(masks, tmp_path, capsys):
+    from gaitcore.silhouettes.settings import (
+        PropagationSettings,
+        SegmentationSettings,
+        write_settings,
+    )
+
+    spec = ClipSpec("w", masks.absolute())
+    other = SegmentationSettings(propagation=PropagationSettings(saliency_every=2))
+    row = analyze_clip(spec, tmp_path / "out", segmentation=other)
+    assert load_project(tmp_path / "out" / "w" / "clip.gaitproj").segmentation == other
+    assert finished_result(tmp_path / "out", spec, other) == row
+    assert finished_result(tmp_path / "out", spec) is None  # the default profile: again
+    write_settings(tmp_path / "p.json", other)
+    manifest = _manifest(tmp_path, f"clip,path\nw,{masks.absolute()}\n")
+    assert main(["batch", str(manifest), "--out", str(tmp_path / "out"), "--settings",
+                 str(tmp_path / "p.json"), "--workers", "1"]) == 0
+    assert "0 analysed, 1 skipped" in capsys.readouterr().out
