@@ -17,6 +17,7 @@ from gaitcore.analysis.analyze import AnalysisSettings
 from gaitcore.project.document import AnimationOptions, FootageFit, Project, Silhouettes
 from gaitcore.project.footage_fit import facing_travel
 from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
+from gaitcore.silhouettes.settings import SegmentationSettings
 
 
 @unique
@@ -240,6 +241,14 @@ def set_out_mark(state: AppState) -> None:
     stop = None if frame + 1 >= state.n_frames else frame + 1
     state.undo_stack.push(TrimCommand(state, start if start <= frame else 0, stop,
                                       f"set the out mark at frame {frame}"))
+
+
+class SegmentationProfileCommand(ProjectCommand):
+    """Segment the clip with other settings (a profile read from a file)."""
+
+    def __init__(self, state: AppState, settings: SegmentationSettings, name: str) -> None:
+        super().__init__(state, replace(state.project, segmentation=settings),
+                         f"use segmentation settings {name}")
 
 
 class FrameRateCommand(ProjectCommand):

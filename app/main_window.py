@@ -258,6 +258,8 @@ class MainWindow(QMainWindow):
         tools.addActions([self.tools.segment_action, self.tools.copy_action,
                           self.tools.propagate_action, self.tools.sketch_action,
                           self.tools.sketch_engine_action])
+        tools.addSeparator()
+        tools.addActions([self.tools.load_profile_action, self.tools.save_profile_action])
 
         view = bar.addMenu("&View")
         for key, flag in (("silhouette", "Silhouette overlay"),

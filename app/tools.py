@@ -10,21 +10,25 @@ results land as undoable commands.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from PySide6.QtCore import QObject
 from PySide6.QtGui import QAction, QActionGroup, QKeySequence
 from PySide6.QtWidgets import QSpinBox, QToolBar
 
-from app.commands import AddStrokesCommand, SetSilhouettesCommand
+from app.commands import AddStrokesCommand, SegmentationProfileCommand, SetSilhouettesCommand
 from app.document import DocumentController
 from app.roto import RotoController
 from app.state import AppState
 from app.widgets.frame_canvas import Tool
 from app.widgets.frame_view import FrameView
 from app.workers import Job
+from gaitcore.errors import GaitInputError
 from gaitcore.footage.sources import FrameSource
 from gaitcore.project.document import Project
 from gaitcore.project.steps import sketched_silhouettes
 from gaitcore.silhouettes.annotations import Stroke
+from gaitcore.silhouettes.settings import read_settings, write_settings
 from gaitcore.silhouettes.sketch import carry_strokes, propagate_strokes
 
 TOOL_KEYS = {Tool.NAVIGATE: "N", Tool.BOX: "A", Tool.SUBJECT_BRUSH: "S",
@@ -90,6 +94,12 @@ class ToolsController(QObject):
         for action in (self.segment_action, self.copy_action, self.propagate_action,
                        self.sketch_action):
             self.toolbar.addAction(action)
+        self.load_profile_action = QAction("Load segmentation settings...", self)
+        self.load_profile_action.setToolTip("Segment with the settings of a profile ('gaitcore "
+                                            "segment --save-settings' writes one)")
+        self.load_profile_action.triggered.connect(lambda _c=False: self.load_profile())
+        self.save_profile_action = QAction("Save segmentation settings...", self)
+        self.save_profile_action.triggered.connect(lambda _c=False: self.save_profile())
 
     def _action(self, text: str, shortcut: str, slot) -> QAction:
         action = QAction(text, self)
@@ -117,6 +127,40 @@ class ToolsController(QObject):
                   "Rasterizing the sketches")
         return self._documents.run(job, lambda sil: state.undo_stack.push(
             SetSilhouettesCommand(state, sil, "use sketches as silhouettes")))
+
+    def load_profile(self) -> bool:
+        """Segment with the settings of a profile file from now on (one undo step)."""
+        asker = self._documents.asker
+        path = asker.open_file("Load segmentation settings", "Segmentation profiles (*.json)")
+        if path is None:
+            return False
+        try:
+            settings = read_settings(path)
+        except GaitInputError as exc:
+            asker.error("Cannot load the segmentation settings", str(exc))
+            return False
+        state = self._state
+        state.undo_stack.push(SegmentationProfileCommand(state, settings, path.name))
+        self._documents.messageRaised.emit(f"segmentation settings of {path.name}: segment "
+                                           "the clip again (Ctrl+G) to use them everywhere")
+        return True
+
+    def save_profile(self) -> bool:
+        """Write the project's segmentation settings to a profile file."""
+        asker = self._documents.asker
+        path = asker.export_path("Save segmentation settings",
+                                 Path("segmentation-settings.json"),
+                                 "Segmentation profiles (*.json)")
+        if path is None:
+            return False
+        try:
+            write_settings(path, self._state.project.segmentation)
+        except OSError as exc:
+            asker.error("Cannot save the segmentation settings",
+                        f"{path}: {exc.strerror or exc}")
+            return False
+        self._documents.messageRaised.emit(f"wrote {path}")
+        return True
 
     # -- strokes ----------------------------------------------------------------------------
     def copy_previous(self) -> None:
