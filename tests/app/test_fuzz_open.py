@@ -7,18 +7,13 @@ run in the process: a Qt window cannot be forked.
 
 from __future__ import annotations
 
-import json
-import random
-import shutil
 from pathlib import Path
 
 import pytest
-from hypothesis import strategies as st
 
-from gaitcore.project.storage import sidecar_dir
 from tests.app.conftest import wait_jobs
 from tests.fuzzing import DEFAULT_CASES, FUZZ_CASES, fuzz, json_cases
-from tests.gaitcore.test_fuzz_readers import _damage_array, _summary_doc, valid_project
+from tests.gaitcore.test_fuzz_readers import _summary_doc, project_cases, valid_project
 
 __all__ = ["valid_project"]  # the fixture, shared with the readers' fuzz test
 
@@ -37,23 +32,9 @@ def _opens_or_says_why(qtbot, window, asker, open_it):
 @pytest.mark.parametrize("n_cases", [
     DEFAULT_CASES, pytest.param(FUZZ_CASES, marks=pytest.mark.fuzz)])
 def test_fuzzed_projects_open_or_say_why(qtbot, window, asker, valid_project, tmp_path, n_cases):
-    doc = json.loads((valid_project / "p.gaitproj").read_text())
-    arrays = sorted(f.name for f in sidecar_dir(valid_project / "p.gaitproj").iterdir())
-    cases = st.one_of(
-        json_cases(doc).map(lambda text: (text, None, 0)),
-        st.tuples(st.just(json.dumps(doc)), st.sampled_from(arrays), st.integers(0, 2**32)))
-
-    def write(case, folder: Path) -> Path:
-        text, array, seed = case
-        path = folder / "p.gaitproj"
-        shutil.copytree(sidecar_dir(valid_project / "p.gaitproj"), sidecar_dir(path))
-        path.write_text(text)
-        if array is not None:
-            _damage_array(sidecar_dir(path) / array, random.Random(seed))
-        return path
-
-    fuzz(cases, write, _opens_or_says_why(qtbot, window, asker, window.open_path), tmp_path,
-         n_cases=n_cases, isolate=False)
+    fuzz(*project_cases(valid_project), _opens_or_says_why(qtbot, window, asker,
+                                                           window.open_path),
+         tmp_path, n_cases=n_cases, isolate=False)
 
 
 @pytest.mark.parametrize("n_cases", [

@@ -20,3 +20,20 @@ def scene_images(tmp_path_factory):
     for t, img in enumerate(frames):
         cv2.imwrite(str(folder / f"{t:05d}.png"), img)
     return folder, truth
+
+
+@pytest.fixture
+def saliency_rates(monkeypatch) -> list[int]:
+    """The rate (every N frames) each salient-object track of the engine was made with,
+    in order; empty where the network is not installed."""
+    import gaitcore.silhouettes.roto as roto
+
+    asked: list[int] = []
+
+    class Recorded(roto.SaliencyTrack):
+        def __init__(self, model, every):
+            asked.append(every)
+            super().__init__(model, every)
+
+    monkeypatch.setattr(roto, "SaliencyTrack", Recorded)
+    return asked

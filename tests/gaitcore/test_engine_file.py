@@ -4,13 +4,10 @@ re-propagates only around its frame; damaged, stale or missing, the project stil
 from __future__ import annotations
 
 import json
-import random
-import shutil
 from dataclasses import replace
 
 import numpy as np
 import pytest
-from hypothesis import strategies as st
 
 from gaitcore.bench.scripted_user import padded_box
 from gaitcore.errors import GaitInputError
@@ -33,9 +30,9 @@ from gaitcore.silhouettes.packed_masks import PackedMasks
 from gaitcore.silhouettes.propagate import Cut, WorkingSize
 from gaitcore.silhouettes.roto import FrameState
 from gaitcore.silhouettes.roto_state import RotoState
-from tests.fuzzing import DEFAULT_CASES, fuzz, json_cases
+from tests.fuzzing import DEFAULT_CASES, fuzz
 from tests.gaitcore.conftest import SCENE_FRAMES
-from tests.gaitcore.test_fuzz_readers import _damage_array
+from tests.gaitcore.test_fuzz_readers import sidecar_cases
 from tests.gaitcore.test_roto_session import shaded_scene
 
 N = SCENE_FRAMES
@@ -273,21 +270,8 @@ def test_fuzzed_engine_files_read_as_none_or_as_masks_that_fit(tmp_path):
                       states)
     valid = tmp_path / "valid" / "p.gaitproj"
     write_engine(valid, "f" * 64, state)
-    doc = json.loads((sidecar_dir(valid) / ENGINE_FILE).read_text())
-
-    arrays = sorted(f.name for f in sidecar_dir(valid).glob("engine-*"))
-    cases = st.one_of(json_cases(doc).map(lambda text: (text, None, 0)),
-                      st.tuples(st.just(json.dumps(doc)), st.sampled_from(arrays),
-                                st.integers(0, 2**32)))
-
-    def write_case(case, folder):
-        text, array, seed = case
-        path = folder / "p.gaitproj"
-        shutil.copytree(sidecar_dir(valid), sidecar_dir(path))
-        (sidecar_dir(path) / ENGINE_FILE).write_text(text)
-        if array is not None:
-            _damage_array(sidecar_dir(path) / array, random.Random(seed))
-        return path
+    cases, write_case = sidecar_cases(valid, lambda path: sidecar_dir(path) / ENGINE_FILE,
+                                      sorted(f.name for f in sidecar_dir(valid).glob("engine-*")))
 
     def fits(read):
         if read is None:

@@ -13,6 +13,7 @@ import json
 import os
 import random
 import shutil
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -117,27 +118,37 @@ def _write_text(name: str):
     return write
 
 
-DAMAGES = ("empty", "truncated", "bit", "huge", "short", "folder", "pipe")
-
-
-def test_fuzzed_projects_raise_only_gait_input_errors(valid_project, tmp_path, request):
-    doc = json.loads((valid_project / "p.gaitproj").read_text())
-    arrays = sorted(f.name for f in sidecar_dir(valid_project / "p.gaitproj").iterdir())
+def sidecar_cases(valid: Path, document: Callable[[Path], Path], arrays: list[str]):
+    """Cases of a project file ``valid`` and its sidecar folder: the JSON ``document(path)``
+    mutated, or one of the sidecar's ``arrays`` damaged. Returns (strategy, write)."""
+    doc = json.loads(document(valid).read_text())
     cases = st.one_of(
         json_cases(doc).map(lambda text: (text, None, 0)),
         st.tuples(st.just(json.dumps(doc)), st.sampled_from(arrays), st.integers(0, 2**32)))
 
     def write(case, folder: Path) -> Path:
         text, array, seed = case
-        path = folder / "p.gaitproj"
-        shutil.copytree(sidecar_dir(valid_project / "p.gaitproj"), sidecar_dir(path))
-        (folder / "clip").mkdir()
-        path.write_text(text)
+        path = folder / valid.name
+        shutil.copytree(sidecar_dir(valid), sidecar_dir(path))
+        (folder / "clip").mkdir(exist_ok=True)
+        document(path).write_text(text)
         if array is not None:
             _damage_array(sidecar_dir(path) / array, random.Random(seed))
         return path
 
-    fuzz(cases, write, load_project, tmp_path, n_cases=_sizes(request), check=_usable)
+    return cases, write
+
+
+def project_cases(valid_project: Path):
+    """:func:`sidecar_cases` of the project file itself and any of its arrays."""
+    project = valid_project / "p.gaitproj"
+    return sidecar_cases(project, lambda path: path,
+                         sorted(f.name for f in sidecar_dir(project).iterdir()))
+
+
+def test_fuzzed_projects_raise_only_gait_input_errors(valid_project, tmp_path, request):
+    fuzz(*project_cases(valid_project), load_project, tmp_path, n_cases=_sizes(request),
+         check=_usable)
 
 
 def _usable(project: Project) -> None:

@@ -490,20 +490,13 @@ def test_segment_command_starts_without_scipy(tmp_path):
     assert out.stdout.split("\n")[-2] == "0 []"
 
 
-def test_segment_command_runs_the_network_as_often_as_asked(tmp_path, monkeypatch):
+def test_segment_command_runs_the_network_as_often_as_asked(tmp_path, saliency_rates):
     """``--saliency-every N`` reaches every pass (the default is the engine's own)."""
     import gaitcore.silhouettes.roto as roto
     from gaitcore.io.segment_command import SALIENCY_EVERY
 
     assert SALIENCY_EVERY == PropagationSettings().saliency_every
-    asked: list[int] = []
-
-    class Recorded(roto.SaliencyTrack):
-        def __init__(self, model, every):
-            asked.append(every)
-            super().__init__(model, every)
-
-    monkeypatch.setattr(roto, "SaliencyTrack", Recorded)
+    asked = saliency_rates
     frames, truth = scene(4)
     clip = _write_clip(tmp_path / "clip", frames)
     b = padded_box(truth[0])
@@ -1636,20 +1629,13 @@ def test_a_segmentation_profile_round_trips_and_names_what_is_wrong(tmp_path):
             read_settings(tmp_path / "bad.json")
 
 
-def test_segment_command_saves_its_profile_and_reads_one_back(tmp_path, monkeypatch):
+def test_segment_command_saves_its_profile_and_reads_one_back(tmp_path, saliency_rates):
     """The profile's settings reach the engine; --saliency-every is over the profile's."""
     import json
 
     import gaitcore.silhouettes.roto as roto
 
-    asked: list[int] = []
-
-    class Recorded(roto.SaliencyTrack):
-        def __init__(self, model, every):
-            asked.append(every)
-            super().__init__(model, every)
-
-    monkeypatch.setattr(roto, "SaliencyTrack", Recorded)
+    asked = saliency_rates
     frames, truth = scene(4)
     clip = _write_clip(tmp_path / "clip", frames)
     b = padded_box(truth[0])

@@ -37,21 +37,14 @@ def test_session_segments_as_the_project_step(scene_images):
 
 
 def test_the_session_and_the_step_segment_with_the_project_s_profile(scene_images,
-                                                                     monkeypatch):
+                                                                     saliency_rates):
     """One profile for the app's engine and the command's step: the project's."""
     from dataclasses import replace
 
     import gaitcore.silhouettes.roto as roto
     from gaitcore.silhouettes.settings import PropagationSettings, SegmentationSettings
 
-    asked: list[int] = []
-
-    class Recorded(roto.SaliencyTrack):
-        def __init__(self, model, every):
-            asked.append(every)
-            super().__init__(model, every)
-
-    monkeypatch.setattr(roto, "SaliencyTrack", Recorded)
+    asked = saliency_rates
     project = replace(_project(scene_images), segmentation=SegmentationSettings(
         propagation=PropagationSettings(saliency_every=3)))
     with open_frames(scene_images[0]) as source:
