@@ -38,8 +38,8 @@ _STILL_LEVELS = 12
 _STILL_SHARE = 0.8
 """A camera held still when, on most sampled frames, at least this share of the pixels are
 within ``_STILL_LEVELS`` (each of B, G and R) of the samples' median. Panning footage shares
-far less (DAVIS's bear, dog, goat and five other animal clips at most 0.51), and so does
-Muybridge's race horse, a loop that keeps the horse in place (0.48 to 0.79)."""
+far less, and so does a loop that keeps a running horse in place (see docs/segmentation.md,
+Settings)."""
 
 _STILL_BINS = 17
 """Bins of :meth:`StillBackground.ratios`: half octaves of the difference from the still
@@ -60,7 +60,7 @@ def may_hold_still(first: np.ndarray, later: np.ndarray, off: np.ndarray) -> boo
     """A first look, from two frames a few apart that are decoded anyway: whether they agree
     off the subject (``off``, bool) as a still camera's frames do (:data:`_STILL_SHARE`).
     Only then are frames sampled across the clip (:func:`camera_held_still`), as a pass
-    decodes them: seeking them first cost 1.2 s of 13 on Muybridge's 540-frame race horse."""
+    decodes them: seeking them first cost a noticeable share of a long clip's time."""
     # Two frames' noise, where the median has little: the levels grow by the square root of 2.
     return bool(_agreeing(later[None], first, off, levels=_STILL_LEVELS * np.sqrt(2))[0]
                 >= _STILL_SHARE)
@@ -207,14 +207,12 @@ class NearbyGround:
     (DAVIS dog, the flow there is the dog's).
 
     A frame ahead shows a planted foot where this frame's mask, moved on, is not: there the
-    foot reads as ground, and DAVIS bear's legs from the box went from 0.72 to 0.67. Clearing
-    more around the moved mask gave them back but lost the dog's uncovered ground (a
-    prototype: bear legs 0.715, dog 0.825 instead of 0.863). The median of the differences,
-    not the difference from the frames' median, is cheaper and read the same (DAVIS dog, goat
-    and bear 0.863 / 0.768 / 0.911 against 0.863 / 0.778 / 0.910). Comparing each pixel with
-    the range its 3x3 neighbourhood spans in the aligned frame (a tolerance for parallax) took
-    the eight clips of :class:`PropagationSettings` to 0.835 / 0.695, but the five others'
-    legs from 0.579 to 0.549: a thin leg matches the ground beside it.
+    foot reads as ground, and legs are cut worse. Clearing more around the moved mask gave
+    them back but lost the dog's uncovered ground. The median of the differences, not the
+    difference from the frames' median, is cheaper and read about the same. Comparing each
+    pixel with the range its 3x3 neighbourhood spans in the aligned frame (a tolerance for
+    parallax) lost legs: a thin leg matches the ground beside it. The figures:
+    docs/segmentation.md (Settings, ``nearby_weight``; Tried).
 
     A pass adds each frame before it is decided (:meth:`add`, ``nearby_reach`` frames ahead),
     and settles its mask once it is (:meth:`settle`), in the pass's order.

@@ -115,24 +115,17 @@ def cut_first(small: np.ndarray, box: Box | None, *, residuals: Sequence[np.ndar
         the cuts seeded by the motion compete: of those that span their box
         (:func:`_spans`), the one whose own colours best separate its two sides
         (:func:`_separation`) is kept. The cut with the whole box "probably subject" is kept
-        when nothing moved; with ``seed``, it competes with the seeded one. (Over fifteen
-        real first frames with motion seeds it won once, by a hair: DAVIS bear from frame
-        30, whose clip reads 0.925 without it against 0.934; and it cost one more GrabCut, a
-        second of the first frame's time.) When no cut spans its box, the whole box is cut
-        too and competes with the others, spanning or not, by the same separation; those
-        under ``_LEAST_SHARE`` of the box (the colours around the box explained all those
-        in it, as a crowd around a dancer's dress and skin does) are left out. A box drawn
-        around more than the body, a kite's lines or a paraglider's wing, is spanned by no
-        cut of the body, and the whole box's cut took the sea or the sky: kept as it was
-        before, it read 0.07 to 0.24 IoU against the body's 0.59 to 0.74 (DAVIS kite-surf,
-        paragliding-launch). Over 21 DAVIS clips boxed on frames 0, 15 and 30, this changed
-        10 of the 63 first cuts, none for the worse, and took their mean IoU from 0.657 to
-        0.685 (each box moved a pixel two ways: 13 of 126 changed, 12 for the better, mean
-        0.662 to 0.681); carried through those 10 clips, from 0.237 to 0.285 (4 higher, 4
-        lower). On eight animal clips boxed 10, 20 and 30% loose, it changed 3 of 24 first
-        cuts, each for the better (cows at 30%: 0.34 to 0.75; over 15 boxes within 2 pixels
-        of that one, 0.38 to 0.51, every one better). A part of the subject is a start the
-        artist can correct; an empty first frame, or the background, loses the whole clip.
+        when nothing moved; with ``seed``, it competes with the seeded one. (Beside motion
+        seeds it almost never won, and it costs one more GrabCut.) When no cut spans its
+        box, the whole box is cut too and competes with the others, spanning or not, by the
+        same separation; those under ``_LEAST_SHARE`` of the box (the colours around the box
+        explained all those in it, as a crowd around a dancer's dress and skin does) are
+        left out. A box drawn around more than the body, a kite's lines or a paraglider's
+        wing, is spanned by no cut of the body, and the whole box's cut took the sea or the
+        sky. This competition made some first cuts better and none worse, on tight and on
+        loose boxes (see docs/segmentation.md, ``motion_offsets``). A part of the subject is
+        a start the artist can correct; an empty first frame, or the background, loses the
+        whole clip.
     """
     if box is None:
         return _cut_labels(small, None, None, subject, background, settings)
@@ -173,10 +166,9 @@ def cut_salient(prob: np.ndarray) -> np.ndarray:
     """A first frame's cut from the salient-object network's map of its box
     (:meth:`~gaitcore.silhouettes.saliency.Saliency.in_box`): the pixels above one half, in
     the largest component and those at least a tenth its size (a leg the map parts from the
-    body at a thin joint). Over fifteen DAVIS animal clips, boxed as the benchmark boxes
-    them, it read 0.876 mean IoU on the first frame; carried through the clips, 0.766
-    against 0.695 from this module's GrabCut (the dog lower: 0.866 -> 0.778, its pale tail
-    left out; the elephant, whose sunlit back GrabCut missed, 0.586 -> 0.830)."""
+    body at a thin joint). It cuts the first frame of animal clips better than this
+    module's GrabCut, which missed a sunlit back, though it may leave out a pale tail (see
+    docs/segmentation.md, ``saliency_weight``)."""
     mask = (prob > 0.5).astype(np.uint8)
     n, comp, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     if n <= 2:

@@ -58,9 +58,9 @@ Box = tuple[int, int, int, int]  # x, y, w, h
 
 _MANY_PIXELS = 40_000
 """A window at least this large measures its exposure and background level on a quarter of
-its pixels (their medians cost 1.3 s of 11 on 300 frames of DAVIS bear, and a quarter tells
-them as well); a smaller one on all of them (on Muybridge's cat, 165 by 109 pixels, a quarter
-changed two frames' exposure, and the cut lost part of the head there)."""
+its pixels (the medians were a noticeable share of a run's time, and a quarter tells them as
+well); a smaller one on all of them (on a small window a quarter changed frames' exposure, and
+the cut lost part of the subject; see docs/segmentation.md, Settings)."""
 
 TOUCHING = 0.02
 """A component is kept when its overlap with the prediction is at least this share of the best
@@ -125,10 +125,8 @@ class WorkingSize:
         uint8) the outline follows its edges below the working size: a guided filter
         (He et al. 2010) fitted at the working size, mask against grey level within
         :data:`EDGE_RADIUS` working pixels, is applied to the full-size grey (He and Sun's
-        fast guided filter, 2015). On 8 DAVIS clips from 3 starts each, from a box: mean IoU
-        0.8267 -> 0.8300 on bear, dog and goat and 0.6889 -> 0.6929 on five others, no run
-        lower; after the scripted strokes, 0.885 -> 0.889 and 0.785 -> 0.798 (bear's legs
-        0.710 -> 0.729). It costs about 2 ms a frame, reading the frame again included.
+        fast guided filter, 2015). It read closer than the bilinear mask on every run
+        measured, at a small cost a frame (see docs/segmentation.md, Settings).
         """
         rows, cols = self.shape
         out = np.zeros((rows, cols), bool)
@@ -173,11 +171,11 @@ class WorkingSize:
 
 EDGE_RADIUS = 2
 """Working pixels either side over which :meth:`WorkingSize.enlarge` fits the mask to the grey
-level (1, 2 and 3 read 0.8291, 0.8301 and 0.8305 on the clips its docstring names)."""
+level (1 to 3 read about the same; see docs/segmentation.md, Settings)."""
 
 EDGE_EPS = 0.005
 """The guided filter's regularisation, in squared grey levels of [0, 1]: flatter windows than
-about 0.07 of a level's spread keep the bilinear mask (0.001 to 0.02 read the same)."""
+about 0.07 of a level's spread keep the bilinear mask (the value matters little)."""
 
 
 def guided_coefficients(guide: np.ndarray, mask: np.ndarray
@@ -323,14 +321,12 @@ class CorrectionTrack:
     cue :func:`fuse_cut` weighs by ``correction_weight``.
 
     A correction mends its own frame, but the cues that missed the subject there (the key's
-    colours, the network) miss it again on the next one, and the pass loses it at once: on
-    DAVIS soccerball the scripted user painted the ball four times and the clip stayed at
-    0.080 IoU; with the turned pixels carried it reads 0.804 (over 50 DAVIS clips, after
-    one scripted stroke per 10 frames: 0.7722 -> 0.7904). Only the pixels turned to the
-    subject are carried: those turned to the background, carried alike, lay where the legs
-    stepped next on DAVIS dog (a background stroke on frame 0 took the clip 0.898 ->
-    0.838). Faded by the flow's trust as well (:attr:`Warp.trust`), the carried pixels died
-    with a fast ball's untrusted flow (soccerball 0.080 again, the 50 clips 0.7744).
+    colours, the network) miss it again on the next one, and the pass loses it at once: a
+    ball the artist painted on frame after frame stayed lost until the turned pixels were
+    carried. Only the pixels turned to the subject are carried: those turned to the
+    background, carried alike, lay where the legs stepped next. Faded by the flow's trust as
+    well (:attr:`Warp.trust`), the carried pixels died with a fast ball's untrusted flow.
+    The figures: docs/segmentation.md (Settings, ``correction_weight``; Tried).
 
     Parameters
     ----------
@@ -467,10 +463,9 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
     -------
     Cut
         The cut, its confidence how far it stands out from its surroundings under
-        ``colours``, over ``colours.gap`` (at most 1). Over 21 DAVIS clips cut from a box,
-        this ranks a clip's frames by their IoU with the reference at a Spearman
-        correlation of 0.33 on average (0.44 on the eight animals); the cut's overlap with
-        its prior, the confidence before, ranked them at 0.10 (0.00).
+        ``colours``, over ``colours.gap`` (at most 1). It ranks a clip's frames by their
+        IoU with the reference better than the cut's overlap with its prior, the
+        confidence before, did (see docs/segmentation.md, ``DOUBTFUL_BELOW``).
 
         The kept warped mask (confidence 0) when the result's area jumped (flood,
         collapse); an empty mask when the warped mask's pixels mostly do not look like the
@@ -538,9 +533,9 @@ def fuse_cut(small: np.ndarray, prior: np.ndarray, trust: np.ndarray, colours: C
 def _salient(salient: np.ndarray | None, mask: np.ndarray) -> bool:
     """Whether the salient-object network calls most of ``mask`` salient: a mask that slid
     onto the background is not, and one that stands out less under the key's colours only
-    because the light fell is. DAVIS goat darkened to 0.6 times in two swells: with the
-    network's better first cut the key's colour gap rose, and the colours alone lost frames
-    65-82 at the second swell's bottom (0.669 mean IoU, 0.757 without the network)."""
+    because the light fell is. A darkened clip, its key's colour gap raised by the network's
+    better first cut, was otherwise lost at the darkest frames (see docs/segmentation.md,
+    ``lost_gap``)."""
     return salient is not None and bool(mask.any()) and float(np.median(salient[mask > 0])) > 0
 
 

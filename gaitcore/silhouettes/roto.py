@@ -90,21 +90,18 @@ FILLED_BOX = 0.95
 """A first cut covering more of its box than this separated nothing (an animal's silhouette
 leaves gaps in its box: between the legs, above the back)."""
 EMPTY_BOX = 0.01
-"""A first cut covering less of its box than this found nothing in it (over 21 real first
-frames from a box, the least share was 0.19)."""
+"""A first cut covering less of its box than this found nothing in it (real first cuts cover
+far more; see docs/segmentation.md, Settings)."""
 SURE_SALIENT = 0.9
 """The network's median under a key frame's background strokes above which the passes from
 that key run without it (:meth:`RotoSegmentation._saliency_track`): it is sure of what the
 artist called background. Under it, what the stroke lies on is a gap the network blurs (the
-ground between a dog's hind legs, 0.77), and the network keeps the body. Placed between the
-two clips it was found on (DAVIS dog, 0.773, and camel's second camel, 0.942). Over the 50
-DAVIS clips of ``docs/segmentation.md``, after the scripted strokes, the rule at 0.5 read
-0.7904; at 0.9, 0.7906 (the 15 animals 0.8298 -> 0.8330, none lower; the dog 0.915 -> 0.928);
-at 0.8, 0.7908; at 0.95, 0.7884 (camel 0.856 -> 0.747)."""
+ground between a dog's hind legs), and the network keeps the body. Placed between the two
+clips it was found on, a dog's gap and a second camel (the figures: ``docs/segmentation.md``,
+Settings)."""
 DOUBTFUL_BELOW = 0.8
-"""Confidence under which a frame is worth a look. Over 21 DAVIS clips cut from a box, 345 of
-1,385 frames neither key nor lost fell under it, 274 of them with an IoU under 0.5 (of 309
-such frames); they averaged 0.20, the frames above it 0.79."""
+"""Confidence under which a frame is worth a look: the frames under it are mostly the badly
+cut ones (see docs/segmentation.md, Settings)."""
 
 
 @dataclass(frozen=True)
@@ -224,9 +221,8 @@ class RotoSegmentation:
         ``final`` is given every frame ``(t, image)`` in order, with its source image, once
         its mask is final (:meth:`frame`): while the clip is carried when that pass is its
         only one (no strokes, a camera that did not hold still on a first look), so that a
-        caller's work on the masks overlaps it (the 300 frames from a box of the speed
-        benchmark 0.2-0.4 s sooner, where that work took 0.63 s after the pass); after the
-        run otherwise.
+        caller's work on the masks overlaps it instead of following the pass; after the run
+        otherwise.
 
         Raises
         ------
@@ -440,7 +436,7 @@ class RotoSegmentation:
         is then the box the subject-coloured region they start spans (:meth:`_box_from_marks`)
         at that size, never less than their extent: a rectangle on a horse's neck, taken for
         twice its length, made the engine work at three times the resolution of a box around
-        the whole horse, and five times slower; a stroke along it, four times slower."""
+        the whole horse, and several times slower; a stroke along it, likewise."""
         if self.box is not None:
             return float(max(self.box.w, self.box.h))
         pts = [sc.points_xy for sc in self.scribbles if sc.frame == 0 and sc.label == "subject"]
@@ -612,10 +608,7 @@ class RotoSegmentation:
         On a frame where the subject was lost (an empty prior), a subject stroke says where
         it is: the frame is cut as a first frame is (:func:`cut_first`), from a box of the
         nearest key's size around the strokes (:meth:`_box_around`). Cut from the strokes'
-        band alone, it took little more than the band: on 20 lost frames of 9 DAVIS clips
-        (one scripted subject stroke each), 0.388 IoU, now 0.507 (motocross-jump 0.04 ->
-        0.13, breakdance 0.31 -> 0.59, car-shadow 0.34 -> 0.80; drift-chicane's small car
-        0.85 -> 0.72, the box's road taken with it)."""
+        band alone, it took little more than the band."""
         small = self.work.shrink(check_frame(self.source[t]))
         subject, background = self._stroke_masks(t)
         prior = prior.astype(np.float32)
@@ -657,10 +650,9 @@ class RotoSegmentation:
         nothing beside it.
 
         The graph cut of a corrected frame learns its colours from that whole frame, and
-        near a stroke it may take what the stroke did not ask for: on DAVIS cows, a
-        background stroke on the ground between the front legs turned that ground and,
-        beside it, a front leg of the soil's shade (the frame 0.859 -> 0.837); five of the
-        scripted user's ten strokes there lowered their own frame."""
+        near a stroke it may take what the stroke did not ask for: a background stroke on
+        the ground between a cow's front legs turned that ground and, beside it, a front leg
+        of the soil's shade."""
         _, _, w, h = cv2.boundingRect(before)
         reach = disk(round(self.s.stroke_zone_frac * max(w, h)))
         # Not run when no stroke lies in the network's window: it would judge nothing.
@@ -775,7 +767,7 @@ class RotoSegmentation:
         carried last frame first (its decoder seeks only to the video's own key frames);
         image files and frames in memory are read last frame first, so that the pass starts
         after one frame's decoding instead of a chunk's (the 50 frames of 960x540 PNG a
-        correction carries backward: about 0.35 s)."""
+        correction carries backward)."""
         def reversed_frames() -> Iterator[Framed]:
             hi = key + 1
             while hi > stop:
@@ -829,12 +821,11 @@ class RotoSegmentation:
         """The network's cue for a pass from key frame ``key`` (``small``, cut ``mask``);
         None without the network, or when the artist's background strokes there lie on what
         the network is sure is salient (``SURE_SALIENT``): it took the same wrong thing, and
-        would carry it back into the frames the stroke was meant to mend. On DAVIS camel the
-        mask drifts onto a second camel and the fence between them, which the network calls
-        salient in the window around both; the scripted user's background stroke on the
-        fence then lowered the clip (0.772 from the box, 0.689 after the strokes) until the
-        passes from such keys ran without the network (0.888; breakdance 0.520 -> 0.640; over
-        14 other clips no change above 0.005)."""
+        would carry it back into the frames the stroke was meant to mend. On a clip of two
+        camels the mask drifts onto the second and the fence between them, which the network
+        calls salient in the window around both; a background stroke on the fence then
+        lowered the clip until the passes from such keys ran without the network (see
+        docs/segmentation.md, ``SURE_SALIENT``)."""
         if self.saliency is None:
             return None
         background = self._stroke_masks(key)[1]
@@ -874,9 +865,8 @@ class RotoSegmentation:
         found again (``anchor``, by :meth:`_carry`) it is not tested, and the gap it shows is
         returned beside the cut (0 otherwise): the pass measures slides from it from then on.
         The key's own gap is no yardstick there: the search found the subject by those very
-        colours, and on DAVIS goat with a better first frame (two scripted strokes on it),
-        its taller gap had every other frame from 41 on lost and found again, the clip 0.801
-        -> 0.617."""
+        colours, and a better first frame's taller gap had every other frame lost and found
+        again (see docs/segmentation.md, ``lost_gap``)."""
         small = colours[1]
         if models is None or exposure is None:
             return Cut(mask, 0.0), 0.0
@@ -940,11 +930,10 @@ class RotoSegmentation:
         One minus the IoU is a distance, so the two masks differ by at most the sum of their
         errors. Where they differ by more than the two errors so estimated add to, both are
         scaled up to it; a pass whose error would then pass its greatest hands the excess to
-        the other. A pass that fails at once, rather than drifting, is so found out: DAVIS
-        dog-agility's pass back from the scripted user's stroke on its last frame lost the
-        dog within three frames, yet it came nearer there than the pass from frame 0 had
-        drifted and took most of those frames (the clip 0.651 from the box, 0.507 after
-        the strokes; now 0.648).
+        the other. A pass that fails at once, rather than drifting, is so found out: a pass
+        back from a stroke on a clip's last frame lost the dog within three frames, yet it
+        came nearer there than the pass from frame 0 had drifted, and took most of those
+        frames until this rule.
         """
         ef_end, eg_end = self._drift(self.fwd, b), self._drift(self.bwd, a)
         ef, eg = ef_end * (t - a) / (b - a), eg_end * (b - t) / (b - a)
@@ -971,11 +960,9 @@ class RotoSegmentation:
 
         Where one pass lost the subject and the other did not, the other is taken whole: a
         pass that lost it does not know where it is, and mixed in it erased the other's mask
-        wherever its share passed one half. DAVIS breakdance: a subject stroke on frame 22,
-        where the pass from frame 0 had lost the dancer, made frame 8 empty (0.60 from that
-        pass) because the pass back from 22 lost her there; over the scripted strokes the
-        clip ended at 0.500 (0.586 before any), now 0.609 (0.264 -> 0.638 and 0.489 -> 0.552
-        with the key colours' k-means drawn from seeds 1 and 2). A pass from a key frame whose
+        wherever its share passed one half: a subject stroke where the pass from frame 0 had
+        lost a dancer emptied earlier frames that pass held, because the pass back from the
+        stroke lost her there. A pass from a key frame whose
         cut does not hold the subject (:meth:`_holds`) counts as lost: it only searched for
         the subject, and measured against that key the other pass looked all drift.
 
@@ -984,11 +971,10 @@ class RotoSegmentation:
         two independent judges' odds multiply: where the drifts cannot tell the passes apart,
         the mask that stands out takes the frame. The drifts are measured against the key
         frames, and a key made by a stroke is the frame's mask before it with the stroke's
-        region turned, wrong elsewhere as it was: on DAVIS bus, a subject stroke on a frame
-        where the mask had lost the bus took part of it, the pass from frame 0, right on the
-        frames before (0.86 IoU), looked as drifted against that partial key as the pass back
-        from it, and small blobs of the latter (confidence 0 to 0.2) took those frames. Over
-        the scripted strokes that clip read 0.452, now 0.736.
+        region turned, wrong elsewhere as it was: a subject stroke on a frame where the mask
+        had lost a bus took part of it, the pass from frame 0, right on the frames before,
+        looked as drifted against that partial key as the pass back from it, and small blobs
+        of the latter, of low confidence, took those frames.
         """
         f = self.fwd.get(t)
         g = None if key_frames_only or b >= self.n else self.bwd.get(t)

