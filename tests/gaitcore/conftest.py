@@ -26,14 +26,14 @@ def scene_images(tmp_path_factory):
 def saliency_rates(monkeypatch) -> list[int]:
     """The rate (every N frames) each salient-object track of the engine was made with,
     in order; empty where the network is not installed."""
-    import gaitcore.silhouettes.roto as roto
+    import gaitcore.silhouettes.roto.passes as passes
 
     asked: list[int] = []
 
-    class Recorded(roto.SaliencyTrack):
+    class Recorded(passes.SaliencyTrack):
         def __init__(self, model, every):
             asked.append(every)
             super().__init__(model, every)
 
-    monkeypatch.setattr(roto, "SaliencyTrack", Recorded)
+    monkeypatch.setattr(passes, "SaliencyTrack", Recorded)
     return asked
