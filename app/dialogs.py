@@ -28,7 +28,7 @@ from gaitcore.footage.sources import DEFAULT_FPS
 from gaitcore.project.document import MAX_SPEED_M_S, AnimationOptions
 from gaitcore.project.steps import FootageSpeed
 from gaitcore.project.storage import SUFFIX
-from gaitcore.schema import MAX_FPS
+from gaitcore.schema import fps_ok
 
 FOOTAGE_FILTER = "Footage (*.mp4 *.mov *.avi *.mkv *.m4v *.webm *.gif);;All files (*)"
 PROJECT_FILTER = f"Gait Studio projects (*{SUFFIX})"
@@ -157,7 +157,7 @@ class Asker:
             value = float(text)
         except ValueError:
             return None
-        return value if 0 < value <= MAX_FPS else None
+        return value if fps_ok(value) else None
 
 
 class HeadlessAsker(Asker):

@@ -19,7 +19,7 @@ from gaitcore.errors import GaitInputError
 from gaitcore.io import segment_command
 from gaitcore.progress import Cancelled
 from gaitcore.project import batch_command, pose_command
-from gaitcore.schema import MAX_FPS, check_path, dump_json
+from gaitcore.schema import check_fps, check_path, dump_json
 
 
 class _Parser(argparse.ArgumentParser):
@@ -68,10 +68,7 @@ def _clip_fps(args: argparse.Namespace) -> float | None:
     from gaitcore.footage.sources import video_fps
 
     if args.fps is not None:
-        if not (0 < args.fps <= MAX_FPS):
-            raise GaitInputError(f"--fps must be a number of frames per second in "
-                                 f"(0, {MAX_FPS:g}], got {args.fps}")
-        return float(args.fps)
+        return check_fps(args.fps, what="--fps")
     return video_fps(args.input) if args.input.is_file() else None
 
 
@@ -241,9 +238,8 @@ def _run_animate(args: argparse.Namespace) -> int:
     if exports and args.skeleton is None:
         raise GaitInputError(f"--{exports[0][0]} needs --skeleton SKEL.json (or a .bvh file) "
                              "to know the joint hierarchy")
-    if args.fps is not None and not (np.isfinite(args.fps) and 0 < args.fps <= MAX_FPS):
-        raise GaitInputError(f"--fps must be a number of frames per second in (0, {MAX_FPS:g}], "
-                             f"got {args.fps}")
+    if args.fps is not None:
+        check_fps(args.fps, what="--fps")
     if args.speed is not None and not (np.isfinite(args.speed) and 0 < args.speed <= 100):
         raise GaitInputError(f"--speed must be metres per second in (0, 100], got {args.speed}")
     if args.root == "footage" and args.skeleton is None:

@@ -46,6 +46,22 @@ _MAX_NPY_HEADER = 10_000
 MAX_FPS = 10_000.0
 """Highest frame rate accepted anywhere (footage, projects, BVH, the command's --fps):
 high-speed cameras stay below it, and 1 / MAX_FPS still prints as a plain BVH frame time."""
+MIN_FPS = 0.001
+"""Lowest frame rate accepted anywhere: one frame in a thousand seconds (a time-lapse);
+below, periods and frame times overflow the arithmetic."""
+
+
+def fps_ok(fps: float) -> bool:
+    """True for a frame rate within [MIN_FPS, MAX_FPS]."""
+    return math.isfinite(fps) and MIN_FPS <= fps <= MAX_FPS
+
+
+def check_fps(fps: float, *, what: str) -> float:
+    """``fps`` when :func:`fps_ok`, else GaitInputError naming ``what``."""
+    if not fps_ok(fps):
+        raise GaitInputError(f"{what} must be a number of frames per second from {MIN_FPS:g} "
+                             f"to {MAX_FPS:g}, got {fps:g}")
+    return float(fps)
 _MISSING = object()
 TEXT_MEMORY_PER_BYTE = 10
 """Memory a reader takes per byte of a text file it parses (the text, its lines or JSON

@@ -32,7 +32,7 @@ from gaitcore.footage.image_folder import (
     read_image,
 )
 from gaitcore.footage.threads import prefetched
-from gaitcore.schema import MAX_FPS
+from gaitcore.schema import check_fps, fps_ok
 
 # FFmpeg prints every decoding error of a damaged video on stderr (thousands of lines before
 # our one-line error), and OpenCV its own "[ERROR:0@...]" lines: every failure becomes a
@@ -346,7 +346,7 @@ def open_frames(
     GaitInputError
         Missing path; unreadable or undecodable file; zero frames; empty folder;
         non-image files or images of different sizes in a folder; a bad frame range; a frame
-        rate that is not within (0, MAX_FPS]; a path that is neither a file nor a folder.
+        rate outside [MIN_FPS, MAX_FPS]; a path that is neither a file nor a folder.
     """
     p = Path(path)
     if not p.exists():
@@ -354,9 +354,8 @@ def open_frames(
     if not (p.is_dir() or p.is_file()):
         raise GaitInputError(f"{p} is neither a video file nor a folder (a pipe or a device?): "
                              "give the path of a video file or image folder")
-    if fps is not None and not (np.isfinite(fps) and 0 < fps <= MAX_FPS):
-        raise GaitInputError(f"frame rate {fps} is not a number of frames per second in "
-                             f"(0, {MAX_FPS:g}]")
+    if fps is not None:
+        check_fps(fps, what="the frame rate")
     if p.is_dir():
         files = list_image_files(p)
         first = read_image(files[0], None)
@@ -413,7 +412,7 @@ def _open_video(p: Path, start: int, stop: int | None, fps: float | None,
         note = (f"{p.name}: its header says {n_header} frames but {n_source} decode; all "
                 f"{n_source} are used")
     s0, s1 = _check_range(start, stop, n_source, p)
-    if fps is None and 0 < header_fps <= MAX_FPS:
+    if fps is None and fps_ok(header_fps):
         fps = header_fps
     size = (int(first.shape[1]), int(first.shape[0]))
     return FrameSource(p, files=None, n_source=n_source, size=size, fps=fps, start=s0, stop=s1,

@@ -23,7 +23,7 @@ import numpy as np
 from gaitcore.analysis.analyze import Analysis
 from gaitcore.animation.animate import AnalysisRecord, stored
 from gaitcore.errors import GaitInputError
-from gaitcore.schema import MAX_FPS, JsonValue, dump_json, read_json
+from gaitcore.schema import MAX_FPS, MIN_FPS, JsonValue, dump_json, read_json
 
 FORMAT = "gaitstudio-analysis"
 VERSION = 1
@@ -163,7 +163,7 @@ def analysis_record_from_dict(data: object, *, where: str = "analysis") -> Analy
     alpha = doc.key("alpha", float(np.log(2.0))).number(lo=0, lo_open=True, hi=1e6)
     period = doc.key("period_frames", None).number(lo=0, lo_open=True, hi=MAX_FRAMES,
                                                    optional=True)
-    fps = doc.key("fps", None).number(lo=0, lo_open=True, hi=MAX_FPS, optional=True)
+    fps = doc.key("fps", None).number(lo=MIN_FPS, hi=MAX_FPS, optional=True)
     travel = doc.key("travel", None)
     travel = None if travel.is_null() else travel.array(min_rows=n, max_rows=n)
     if travel is not None and np.abs(travel).max(initial=0.0) > MAX_COORDINATE:

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from gaitcore.errors import GaitInputError
-from gaitcore.schema import MiB, read_text
+from gaitcore.schema import MiB, check_fps, check_path, read_text
 from gaitcore.silhouettes.annotations import Rect
 
 COLUMNS = ("clip", "path", "box", "subject", "background", "start", "stop", "fps")
@@ -165,8 +165,13 @@ def _parse_row(header: list[str], cells: list[str], line: int, base: Path) -> Cl
         raise GaitInputError(f"unknown column {unknown[0]!r} (a manifest has {', '.join(COLUMNS)})")
     if not row.get("path"):
         raise GaitInputError("no path: give the video file or image folder of the clip")
-    clip_path = Path(row["path"]).expanduser()
-    clip_path = clip_path if clip_path.is_absolute() else base / clip_path
+    try:
+        given = Path(row["path"]).expanduser()
+    except RuntimeError:  # ~user of no such user: the name as it is
+        given = Path(row["path"])
+    clip_path = check_path(given, what="clip path")
+    clip_path = clip_path if clip_path.is_absolute() else check_path(base / clip_path,
+                                                                      what="clip path")
     if not clip_path.exists():
         raise GaitInputError(f"{row['path']} does not exist (looked for {clip_path})")
     box = _rects(row.get("box", ""), "box")
@@ -224,9 +229,7 @@ def _fps(text: str) -> float | None:
         value = float(text)
     except ValueError:
         value = math.nan
-    if not (math.isfinite(value) and value > 0):
-        raise GaitInputError(f"fps {text!r} is not a positive number of frames per second")
-    return value
+    return check_fps(value, what="fps")
 
 
 LOCK_NAME = "batch.lock"

@@ -31,7 +31,7 @@ from gaitcore.errors import GaitInputError
 from gaitcore.project.document import ORIGINS, AnimationOptions, FootageFit, Project, Silhouettes
 from gaitcore.rig.proportions import RigProportions
 from gaitcore.rig.skeleton import Skeleton
-from gaitcore.schema import MAX_FPS, JsonValue, check_path, dump_json, read_json, read_npy
+from gaitcore.schema import MAX_FPS, MIN_FPS, JsonValue, check_path, dump_json, read_json, read_npy
 from gaitcore.silhouettes.annotations import SCRIBBLE_LABELS, Rect, Scribble, Stroke
 from gaitcore.silhouettes.settings import (
     SegmentationSettings,
@@ -209,7 +209,7 @@ def _from_json(doc: JsonValue, p: Path) -> Project:
         footage=_footage(doc.key("footage"), p),
         frame_start=start,
         frame_stop=stop,
-        fps=doc.key("fps").number(lo=0, lo_open=True, hi=MAX_FPS, optional=True),
+        fps=doc.key("fps").number(lo=MIN_FPS, hi=MAX_FPS, optional=True),
         box=_box(doc.key("box", None)),
         subject_rects=_rects(doc.key("subject_rects")),
         background_rects=_rects(doc.key("background_rects")),

@@ -317,3 +317,13 @@ def test_a_clip_done_with_another_segmentation_profile_runs_again(masks, tmp_pat
     assert main(["batch", str(manifest), "--out", str(tmp_path / "out"), "--settings",
                  str(tmp_path / "p.json"), "--workers", "1"]) == 0
     assert "0 analysed, 1 skipped" in capsys.readouterr().out
+
+
+def test_a_clip_path_too_long_or_of_no_user_is_a_bad_row_not_a_crash(masks):
+    """Found by the widened fuzzer: a path of 400 characters escaped as OSError."""
+    long_name = "9" * 400 + "walker"
+    m = read_manifest(_manifest(masks.parent, f"clip,path\na,{long_name}\nb,~nobody-here/x\n"
+                                              "c,walker\n"))
+    assert [c.clip for c in m.clips] == ["c"]
+    said = " ".join(p.message for p in m.problems)
+    assert "too long" in said and "does not exist" in said

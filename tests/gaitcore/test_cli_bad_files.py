@@ -216,3 +216,11 @@ def test_the_memory_estimate_bounds_what_the_analysis_takes(n):
     finally:
         tracemalloc.stop()
     assert peak <= memory_needed(*roi.crops.shape) <= 3 * peak
+
+
+def test_a_frame_rate_too_small_to_compute_with_is_refused(tmp_path, capsys):
+    """Found by the widened fuzzer: ``animate --fps 5e-324`` overflowed a division."""
+    (tmp_path / "keys.csv").write_text("frame,a.rz\n1,0\n4,1\n")
+    (tmp_path / "an.json").write_text(json.dumps(ANALYSIS))
+    _refused(["animate", str(tmp_path / "an.json"), "--key-poses", str(tmp_path / "keys.csv"),
+              "--out", str(tmp_path / "c.csv"), "--fps", "5e-324"], capsys, "from 0.001 to")

@@ -219,7 +219,7 @@ def test_bad_bvh_as_skeleton(walker_analysis, tmp_path, capsys, text, message):
 
 def test_bad_fps(walker_analysis, tmp_path, capsys):
     assert _animate(walker_analysis, "full", tmp_path, "--fps", "0") == 2
-    assert "--fps must be a number of frames per second in (0, 10000]" in _error_line(capsys)
+    assert "--fps must be a number of frames per second from 0.001 to 10000" in _error_line(capsys)
 
 
 def test_default_curves_keep_the_key_columns(walker_analysis, tmp_path):

@@ -18,7 +18,7 @@ from gaitcore.io.bvh.hierarchy import Node, parse_hierarchy
 from gaitcore.io.pose_table import PoseTable
 from gaitcore.rig.rotations import axis_matrix, continuous_zxy
 from gaitcore.rig.skeleton import Joint, Skeleton
-from gaitcore.schema import MAX_FPS, is_number, read_text
+from gaitcore.schema import MAX_FPS, MIN_FPS, is_number, read_text
 
 _OUR_ROTATION_ORDER = "zxy"
 _SIDE_WORDS = (("Left", "Right"), ("left", "right"), ("LEFT", "RIGHT"))
@@ -126,9 +126,9 @@ def _parse_motion(lines: list[str], motion_line: int, n_columns: int,
     frames, frame_time = header["frames"], header["time"]
     if not (np.isfinite(frames) and frames == int(frames) and frames >= 0):
         raise GaitInputError(f"{where}: 'Frames:' must be a whole number, got {frames:g}")
-    if not (np.isfinite(frame_time) and frame_time >= 1.0 / MAX_FPS):
-        raise GaitInputError(f"{where}: 'Frame Time:' must be a positive number of seconds "
-                             f"(at most {MAX_FPS:g} frames per second), got {frame_time:g}")
+    if not (np.isfinite(frame_time) and 1.0 / MAX_FPS <= frame_time <= 1.0 / MIN_FPS):
+        raise GaitInputError(f"{where}: 'Frame Time:' must be a number of seconds from "
+                             f"{1.0 / MAX_FPS:g} to {1.0 / MIN_FPS:g}, got {frame_time:g}")
     if len(rows) != frames:
         raise GaitInputError(
             f"{where}: 'Frames: {int(frames)}' but the file has {len(rows)} motion line(s); "
