@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -228,7 +227,7 @@ def _fps(text: str) -> float | None:
     try:
         value = float(text)
     except ValueError:
-        value = math.nan
+        raise GaitInputError(f"fps {text!r} is not a number of frames per second") from None
     return check_fps(value, what="fps")
 
 

@@ -296,8 +296,8 @@ def test_a_pipe_in_the_sidecar_folder_is_refused_without_blocking(tmp_path):
 @pytest.mark.parametrize("field, value, words", [
     ("footage", 7, "footage must be an object"),
     ("frame_start", "1e400", "frame_start must be a whole number"),
-    ("fps", "NaN", "fps must be a finite number above 0"),
-    ("fps", -24, "fps must be a finite number above 0"),
+    ("fps", "NaN", "fps must be a finite number from 0.001"),
+    ("fps", -24, "fps must be a finite number from 0.001"),
     ("key_poses", [1, 2], "key_poses must be an object"),
     ("subject_rects", [[0, 0, "9" * 400, 5]], r"subject_rects\[0\]\[2\] must be a whole number"),
 ])

@@ -297,7 +297,7 @@ BROKEN = {
     "no Frames line": (_broken("Frames: 2\n", ""),
                        r"line 17: expected 'Frames: N', found 'Frame Time: 0.04'"),
     "frame count": (_broken("Frames: 2", "Frames: 3"), r"'Frames: 3' but the file has 2 motion"),
-    "zero frame time": (_broken("Frame Time: 0.04", "Frame Time: 0"), r"must be a positive"),
+    "zero frame time": (_broken("Frame Time: 0.04", "Frame Time: 0"), r"seconds from 0.0001"),
     "non-numeric": (_broken("0 1 0 0 0 0 20", "0 1 0 0 abc 0 20"),
                     r"line 20: 'abc' is not a number"),
     "NaN value": (_broken("0 1 0 0 0 0 20", "0 1 0 0 nan 0 20"), r"line 20: NaN"),

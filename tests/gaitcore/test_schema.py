@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import doctest
 import os
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -138,9 +137,9 @@ def _big_inputs(folder):
 
     from gaitcore.io.bvh.writer import write_bvh
     from gaitcore.io.pose_table import PoseTable, write_pose_table
-    from gaitcore.rig.skeleton import Skeleton
+    from gaitcore.rig.templates import load_template
 
-    skel = Skeleton.from_json(Path("resources/skeletons/horse.json"))
+    skel = load_template("horse")
     values = np.random.default_rng(0).normal(size=(3000, len(skel.channel_names))) * 10
     table = PoseTable(np.arange(3000), skel.channel_names, values)
     write_bvh(folder / "big.bvh", skel, table)
@@ -188,12 +187,11 @@ def test_a_file_too_large_for_the_memory_left_is_refused_before_it_is_read(tmp_p
 
 
 def test_a_joint_a_billion_kilometres_away_is_refused():
-    import json
-
     from gaitcore.errors import GaitInputError
     from gaitcore.rig.skeleton import Skeleton
+    from gaitcore.rig.templates import load_template
 
-    doc = json.loads(Path("resources/skeletons/horse.json").read_text())
+    doc = load_template("horse").to_dict()
     doc["joints"][3]["offset"] = [1e16, 0, 0]
     with pytest.raises(GaitInputError, match="offset of 1e\\+16 m is beyond"):
         Skeleton.from_json(doc)
