@@ -15,6 +15,9 @@ that claims more (an image bomb) is refused before OpenCV allocates it."""
 
 MiB = 1 << 20
 GiB = 1 << 30
+UNCHECKED_BYTES = 64 * MiB
+"""Jobs needing less are never checked: the memory left is only read for larger ones (it
+costs a few reads of /proc, and every small file would pay them)."""
 
 
 def free_memory() -> int | None:
@@ -55,6 +58,8 @@ def check_memory(needed: int, *, job: str, advice: Callable[[float], str]) -> No
     GaitInputError
         With both figures and the advice.
     """
+    if needed < UNCHECKED_BYTES:
+        return
     free = free_memory()
     if free is not None and needed > free:
         raise GaitInputError(f"{job} needs about {_size(needed)} of memory and "

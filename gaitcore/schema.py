@@ -39,9 +39,8 @@ from typing import Any, Literal, NoReturn, overload
 import numpy as np
 
 from gaitcore.errors import GaitInputError
-from gaitcore.limits import check_memory
+from gaitcore.limits import MiB, check_memory
 
-MiB = 1 << 20
 _MAX_NPY_HEADER = 10_000
 MAX_FPS = 10_000.0
 """Highest frame rate accepted anywhere (footage, projects, BVH, the command's --fps):

@@ -38,9 +38,6 @@ from gaitcore.project.batch import (
 from gaitcore.project.manifest import LOCK_NAME, ClipSpec, Manifest
 from gaitcore.silhouettes.settings import SegmentationSettings
 
-_Settings = tuple[AnalysisSettings, SegmentationSettings]
-"""What every clip of a batch is analysed and segmented with."""
-
 SUMMARY_EVERY_S = 1.0
 """Shortest interval between two rewrites of the summary while results arrive."""
 CONNECT_TIMEOUT_S = 10.0
@@ -113,7 +110,7 @@ def run_batch(manifest: Manifest, out_dir: Path, *, scheduler: str | None = None
     except OSError as exc:
         raise GaitInputError(f"cannot create the output folder {out_dir}: {exc.strerror}") from None
     with batch_lock(out_dir):
-        return _run_locked(manifest, out_dir, scheduler, workers, (settings, segmentation),
+        return _run_locked(manifest, out_dir, scheduler, workers, settings, segmentation,
                            progress, say)
 
 
@@ -136,11 +133,10 @@ def batch_lock(out_dir: Path) -> Iterator[None]:
 
 
 def _run_locked(manifest: Manifest, out_dir: Path, scheduler: str | None, workers: int | None,
-                settings: _Settings, progress: Progress | None,
-                say: Callable[[str], None]) -> BatchResult:
+                settings: AnalysisSettings, segmentation: SegmentationSettings,
+                progress: Progress | None, say: Callable[[str], None]) -> BatchResult:
     """:func:`run_batch` once the output folder is locked."""
     remove_partial_folders(out_dir)
-    segmentation = settings[1]
     rows = {spec.clip: finished_result(out_dir, spec, segmentation) or pending(spec)
             for spec in manifest.clips}
     todo = [spec for spec in manifest.clips if rows[spec.clip].status == "pending"]
@@ -154,7 +150,8 @@ def _run_locked(manifest: Manifest, out_dir: Path, scheduler: str | None, worker
         n_workers = min(workers or default_workers(), len(todo))
         try:
             with _client(scheduler, n_workers, say) as client:
-                _run_tasks(client, todo, out_dir, settings, summary, progress, say, skipped)
+                _run_tasks(client, todo, out_dir, settings, segmentation, summary, progress,
+                           say, skipped)
         finally:  # after the workers stopped: a folder completed meanwhile counts as done
             for spec in todo:
                 if summary.status(spec.clip) == "pending":
@@ -164,13 +161,15 @@ def _run_locked(manifest: Manifest, out_dir: Path, scheduler: str | None, worker
     return BatchResult(summary.rows(), len(todo), skipped)
 
 
-def _run_tasks(client, todo: list[ClipSpec], out_dir: Path, settings: _Settings,
+def _run_tasks(client, todo: list[ClipSpec], out_dir: Path, settings: AnalysisSettings,
+               segmentation: SegmentationSettings,
                summary: _Summary, progress: Progress | None, say: Callable[[str], None],
                done: int) -> None:
     """Submit one task per clip and record each result as it arrives."""
     from distributed import as_completed
 
-    futures = {client.submit(_task, spec, out_dir, settings, pure=False): spec for spec in todo}
+    futures = {client.submit(_task, spec, out_dir, settings, segmentation, pure=False): spec
+               for spec in todo}
     try:
         for future in as_completed(futures):
             spec = futures.pop(future)
@@ -186,12 +185,13 @@ def _run_tasks(client, todo: list[ClipSpec], out_dir: Path, settings: _Settings,
         client.cancel(list(futures))
 
 
-def _task(spec: ClipSpec, out_dir: Path, settings: _Settings) -> ClipSummary:
+def _task(spec: ClipSpec, out_dir: Path, settings: AnalysisSettings,
+          segmentation: SegmentationSettings) -> ClipSummary:
     """What a worker runs: one clip on one core (Dask, not OpenCV, spreads the work)."""
     import cv2
 
     cv2.setNumThreads(1)
-    return analyze_clip(spec, out_dir, settings=settings[0], segmentation=settings[1])
+    return analyze_clip(spec, out_dir, settings=settings, segmentation=segmentation)
 
 
 def _outcome(row: ClipSummary) -> str:

@@ -168,9 +168,7 @@ def _parse_row(header: list[str], cells: list[str], line: int, base: Path) -> Cl
         given = Path(row["path"]).expanduser()
     except RuntimeError:  # ~user of no such user: the name as it is
         given = Path(row["path"])
-    clip_path = check_path(given, what="clip path")
-    clip_path = clip_path if clip_path.is_absolute() else check_path(base / clip_path,
-                                                                      what="clip path")
+    clip_path = check_path(given if given.is_absolute() else base / given, what="clip path")
     if not clip_path.exists():
         raise GaitInputError(f"{row['path']} does not exist (looked for {clip_path})")
     box = _rects(row.get("box", ""), "box")

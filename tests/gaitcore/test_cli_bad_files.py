@@ -190,10 +190,10 @@ def test_a_clip_too_large_for_the_memory_left_is_refused_with_the_figures(tmp_pa
     import gaitcore.limits
     from tests.gaitcore.walker import walker_clip, write_mask_folder
 
-    masks = write_mask_folder(tmp_path / "masks", walker_clip(60))
+    masks = write_mask_folder(tmp_path / "masks", walker_clip(500))  # over UNCHECKED_BYTES
     monkeypatch.setattr(gaitcore.limits, "free_memory", lambda: 100_000)
     _refused(["analyze", str(masks), "--out", str(tmp_path / "an")], capsys,
-             "analysing 60 frames of")
+             "analysing 500 frames of")
     monkeypatch.setattr(gaitcore.limits, "free_memory", lambda: None)  # nothing says: run
     assert main(["analyze", str(masks), "--out", str(tmp_path / "an")]) == 0
 
