@@ -39,6 +39,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -49,6 +50,9 @@ MAX_CASE_BYTES = 1 << 30
 DEFAULT_CASES = 300
 """Cases per reader in the default run; ``-m fuzz`` runs FUZZ_CASES."""
 FUZZ_CASES = 4000
+CASE_COUNTS = pytest.mark.parametrize("n_cases", [
+    DEFAULT_CASES, pytest.param(FUZZ_CASES, marks=pytest.mark.fuzz)])
+"""Runs a fuzz test taking ``n_cases`` twice: DEFAULT_CASES, and FUZZ_CASES under ``-m fuzz``."""
 
 BIG_INT = "9" * 400
 SPECIAL_NUMBERS = ("1e400", "-1e400", BIG_INT, "-" + BIG_INT, "NaN", "Infinity", "-Infinity",

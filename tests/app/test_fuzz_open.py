@@ -9,10 +9,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-
 from tests.app.conftest import wait_jobs
-from tests.fuzzing import DEFAULT_CASES, FUZZ_CASES, fuzz, json_cases
+from tests.fuzzing import CASE_COUNTS, fuzz, json_cases
 from tests.gaitcore.test_fuzz_readers import _summary_doc, project_cases, valid_project
 
 __all__ = ["valid_project"]  # the fixture, shared with the readers' fuzz test
@@ -29,16 +27,14 @@ def _opens_or_says_why(qtbot, window, asker, open_it):
     return read
 
 
-@pytest.mark.parametrize("n_cases", [
-    DEFAULT_CASES, pytest.param(FUZZ_CASES, marks=pytest.mark.fuzz)])
+@CASE_COUNTS
 def test_fuzzed_projects_open_or_say_why(qtbot, window, asker, valid_project, tmp_path, n_cases):
     fuzz(*project_cases(valid_project), _opens_or_says_why(qtbot, window, asker,
                                                            window.open_path),
          tmp_path, n_cases=n_cases, isolate=False)
 
 
-@pytest.mark.parametrize("n_cases", [
-    DEFAULT_CASES, pytest.param(FUZZ_CASES, marks=pytest.mark.fuzz)])
+@CASE_COUNTS
 def test_fuzzed_batch_summaries_open_or_say_why(qtbot, window, asker, tmp_path, n_cases):
     doc = _summary_doc(tmp_path)
 

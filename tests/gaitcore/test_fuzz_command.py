@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 from gaitcore.cli import main
 from gaitcore.io.pose_table import PoseTable, write_pose_table
 from gaitcore.rig.templates import load_template
-from tests.fuzzing import DEFAULT_CASES, FUZZ_CASES, SPECIAL_NUMBERS, fuzz
+from tests.fuzzing import CASE_COUNTS, SPECIAL_NUMBERS, fuzz
 
 VALUES = SPECIAL_NUMBERS + ("-1", "0", "", "abc", "1,2", "-10,-10,50,50", "1e300", "nan",
                             "inf", "0,0,0,0", "3,-4,5,6", "--", "-", "1.5", "99999999999",
@@ -100,8 +100,7 @@ def _run(path: Path) -> None:
         assert "unexpected" not in said, f"{argv}: {said}"
 
 
-@pytest.mark.parametrize("n_cases", [
-    DEFAULT_CASES, pytest.param(FUZZ_CASES, marks=pytest.mark.fuzz)])
+@CASE_COUNTS
 def test_fuzzed_command_lines_exit_0_or_2_with_one_line(templates, n_cases, tmp_path):
     def write(seed: int, folder: Path) -> Path:
         rng = random.Random(seed)

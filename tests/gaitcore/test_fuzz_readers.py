@@ -43,8 +43,7 @@ from gaitcore.schema import MAX_FPS
 from gaitcore.silhouettes.annotations import Rect, Scribble, Stroke
 from gaitcore.silhouettes.tracking import RoiClip
 from tests.fuzzing import (
-    DEFAULT_CASES,
-    FUZZ_CASES,
+    CASE_COUNTS,
     SPECIAL_NUMBERS,
     fuzz,
     json_cases,
@@ -62,10 +61,6 @@ BVH_PIECES = SPECIAL_NUMBERS + (
 CSV_PIECES = SPECIAL_NUMBERS + (
     "inf", "nan", "", ",", ",,", "frame", '"', '"a\nb"', "x" * 200_000, "1" * 200_000, "-1",
     "1.5", "1e20", "\x00", "frame,frame")
-
-
-def _sizes(request) -> int:
-    return FUZZ_CASES if request.node.get_closest_marker("fuzz") else DEFAULT_CASES
 
 
 @pytest.fixture(scope="module")
@@ -146,8 +141,9 @@ def project_cases(valid_project: Path):
                          sorted(f.name for f in sidecar_dir(project).iterdir()))
 
 
-def test_fuzzed_projects_raise_only_gait_input_errors(valid_project, tmp_path, request):
-    fuzz(*project_cases(valid_project), load_project, tmp_path, n_cases=_sizes(request),
+@CASE_COUNTS
+def test_fuzzed_projects_raise_only_gait_input_errors(valid_project, tmp_path, n_cases):
+    fuzz(*project_cases(valid_project), load_project, tmp_path, n_cases=n_cases,
          check=_usable)
 
 
@@ -165,14 +161,16 @@ def _usable(project: Project) -> None:
             assert np.all(np.isfinite(project.silhouettes.window_xywh(int(found[0])) or ()))
 
 
-def test_fuzzed_skeleton_files_raise_only_gait_input_errors(tmp_path, request):
+@CASE_COUNTS
+def test_fuzzed_skeleton_files_raise_only_gait_input_errors(tmp_path, n_cases):
     doc = HORSE.to_dict()
 
     fuzz(json_cases(doc), _write_text("s.json"), Skeleton.from_json, tmp_path,
-         n_cases=_sizes(request))
+         n_cases=n_cases)
 
 
-def test_fuzzed_analysis_files_raise_only_gait_input_errors(tmp_path, request):
+@CASE_COUNTS
+def test_fuzzed_analysis_files_raise_only_gait_input_errors(tmp_path, n_cases):
     n = 6
     doc = {"format": "gaitstudio-analysis", "version": 1, "source": "", "n_frames": n,
            "pcs": 2, "keys": 2, "alpha": 0.69, "roi_size": [9, 7], "usable": True,
@@ -182,23 +180,25 @@ def test_fuzzed_analysis_files_raise_only_gait_input_errors(tmp_path, request):
            "loop_angle": [0.1 * i for i in range(n)]}
 
     fuzz(json_cases(doc), _write_text("analysis.json"), read_analysis_json, tmp_path,
-         n_cases=_sizes(request), check=_finite_record)
+         n_cases=n_cases, check=_finite_record)
 
 
-def test_fuzzed_pose_tables_raise_only_gait_input_errors(tmp_path, request):
+@CASE_COUNTS
+def test_fuzzed_pose_tables_raise_only_gait_input_errors(tmp_path, n_cases):
     write_pose_table(tmp_path / "good.csv", PoseTable(np.arange(4), HORSE.channel_names, POSES))
     good = (tmp_path / "good.csv").read_text()
 
     fuzz(text_cases(good, CSV_PIECES), _write_text("p.csv"), read_pose_table, tmp_path / "cases",
-         n_cases=_sizes(request))
+         n_cases=n_cases)
 
 
-def test_fuzzed_bvh_files_raise_only_gait_input_errors(tmp_path, request):
+@CASE_COUNTS
+def test_fuzzed_bvh_files_raise_only_gait_input_errors(tmp_path, n_cases):
     write_bvh(tmp_path / "good.bvh", HORSE, PoseTable(np.arange(4), HORSE.channel_names, POSES))
     good = (tmp_path / "good.bvh").read_text()
 
     fuzz(text_cases(good, BVH_PIECES), _write_text("m.bvh"), read_bvh, tmp_path / "cases",
-         n_cases=_sizes(request))
+         n_cases=n_cases)
 
 
 def _finite_record(record) -> None:
@@ -209,7 +209,8 @@ def _finite_record(record) -> None:
             assert np.all(np.isfinite(np.asarray(value, float))), name
 
 
-def test_fuzzed_scribbles_raise_only_gait_input_errors(tmp_path, request):
+@CASE_COUNTS
+def test_fuzzed_scribbles_raise_only_gait_input_errors(tmp_path, n_cases):
     doc = scribbles_to_dict([Scribble([[1.5, 2.0], [30.0, 40.5]], 8.0, 0, "subject"),
                              Scribble([[5.0, 5.0]], 3.0, 4, "background")])
 
@@ -218,7 +219,7 @@ def test_fuzzed_scribbles_raise_only_gait_input_errors(tmp_path, request):
             assert np.all(np.isfinite(sc.points_xy)) and 0 < sc.width_px < 1e6
 
     fuzz(json_cases(doc), _write_text("s.json"), lambda p: read_scribbles(p, n_frames=10),
-         tmp_path, n_cases=_sizes(request), check=usable)
+         tmp_path, n_cases=n_cases, check=usable)
 
 
 MANIFEST_PIECES = SPECIAL_NUMBERS + (
@@ -226,7 +227,8 @@ MANIFEST_PIECES = SPECIAL_NUMBERS + (
     "../..", "/dev/zero", "walker;walker", ",,,,,,,,,,", "\x00", '"', "a\nb", "fps")
 
 
-def test_fuzzed_manifests_raise_only_gait_input_errors(tmp_path, request):
+@CASE_COUNTS
+def test_fuzzed_manifests_raise_only_gait_input_errors(tmp_path, n_cases):
     good = ('clip,path,box,subject,background,start,stop,fps\n'
             'a,walker,"1,2,30,40",,,0,3,12.5\n,walker,,"1,1,5,5","0,0,2,2",,,\n')
 
@@ -236,7 +238,7 @@ def test_fuzzed_manifests_raise_only_gait_input_errors(tmp_path, request):
         return folder / "m.csv"
 
     fuzz(text_cases(good, MANIFEST_PIECES), write, read_manifest, tmp_path / "cases",
-         n_cases=_sizes(request))
+         n_cases=n_cases)
 
 
 @pytest.fixture(scope="module")
@@ -248,7 +250,8 @@ def clip_result(tmp_path_factory) -> tuple[ClipSpec, Path]:
     return spec, root / "out" / "w"
 
 
-def test_fuzzed_clip_results_make_a_re_run_run_the_clip_again(clip_result, tmp_path, request):
+@CASE_COUNTS
+def test_fuzzed_clip_results_make_a_re_run_run_the_clip_again(clip_result, tmp_path, n_cases):
     """A batch re-run reads each clip's result.json back: damage means 'run it again'."""
     spec, folder = clip_result
     doc = json.loads((folder / "result.json").read_text())
@@ -263,7 +266,7 @@ def test_fuzzed_clip_results_make_a_re_run_run_the_clip_again(clip_result, tmp_p
         assert stored is None or stored.spec == spec
         return stored
 
-    fuzz(json_cases(doc), write, read, tmp_path, n_cases=_sizes(request))
+    fuzz(json_cases(doc), write, read, tmp_path, n_cases=n_cases)
 
 
 def _summary_doc(tmp_path: Path) -> dict:
@@ -283,71 +286,22 @@ def _summary_usable(rows) -> None:
             assert value is None or np.isfinite(value)
 
 
-def test_fuzzed_batch_summaries_raise_only_gait_input_errors(tmp_path, request):
+@CASE_COUNTS
+def test_fuzzed_batch_summaries_raise_only_gait_input_errors(tmp_path, n_cases):
     doc = _summary_doc(tmp_path)
     fuzz(json_cases(doc), _write_text("summary.json"), read_summary, tmp_path / "cases",
-         n_cases=_sizes(request), check=_summary_usable)
+         n_cases=n_cases, check=_summary_usable)
 
 
-def test_fuzzed_batch_summary_tables_raise_only_gait_input_errors(tmp_path, request):
+@CASE_COUNTS
+def test_fuzzed_batch_summary_tables_raise_only_gait_input_errors(tmp_path, n_cases):
     _summary_doc(tmp_path)
     good = (tmp_path / "summary.csv").read_text()
     fuzz(text_cases(good, CSV_PIECES), _write_text("summary.csv"), read_summary,
-         tmp_path / "cases", n_cases=_sizes(request), check=_summary_usable)
+         tmp_path / "cases", n_cases=n_cases, check=_summary_usable)
 
 
-@pytest.mark.fuzz
-def test_4000_fuzzed_projects(valid_project, tmp_path, request):
-    test_fuzzed_projects_raise_only_gait_input_errors(valid_project, tmp_path, request)
-
-
-@pytest.mark.fuzz
-def test_4000_fuzzed_skeleton_files(tmp_path, request):
-    test_fuzzed_skeleton_files_raise_only_gait_input_errors(tmp_path, request)
-
-
-@pytest.mark.fuzz
-def test_4000_fuzzed_analysis_files(tmp_path, request):
-    test_fuzzed_analysis_files_raise_only_gait_input_errors(tmp_path, request)
-
-
-@pytest.mark.fuzz
-def test_4000_fuzzed_pose_tables(tmp_path, request):
-    test_fuzzed_pose_tables_raise_only_gait_input_errors(tmp_path, request)
-
-
-@pytest.mark.fuzz
-def test_4000_fuzzed_bvh_files(tmp_path, request):
-    test_fuzzed_bvh_files_raise_only_gait_input_errors(tmp_path, request)
-
-
-@pytest.mark.fuzz
-def test_4000_fuzzed_scribbles(tmp_path, request):
-    test_fuzzed_scribbles_raise_only_gait_input_errors(tmp_path, request)
-
-
-@pytest.mark.fuzz
-def test_4000_fuzzed_manifests(tmp_path, request):
-    test_fuzzed_manifests_raise_only_gait_input_errors(tmp_path, request)
-
-
-@pytest.mark.fuzz
-def test_4000_fuzzed_clip_results(clip_result, tmp_path, request):
-    test_fuzzed_clip_results_make_a_re_run_run_the_clip_again(clip_result, tmp_path, request)
-
-
-@pytest.mark.fuzz
-def test_4000_fuzzed_batch_summaries(tmp_path, request):
-    test_fuzzed_batch_summaries_raise_only_gait_input_errors(tmp_path, request)
-
-
-@pytest.mark.fuzz
-def test_4000_fuzzed_batch_summary_tables(tmp_path, request):
-    test_fuzzed_batch_summary_tables_raise_only_gait_input_errors(tmp_path, request)
-
-
-@pytest.mark.parametrize("n_cases", [
-    DEFAULT_CASES, pytest.param(FUZZ_CASES, marks=pytest.mark.fuzz)])
+@CASE_COUNTS
 def test_fuzzed_segmentation_profiles_raise_only_gait_input_errors(tmp_path, n_cases):
     from gaitcore.silhouettes.settings import (
         SegmentationSettings,
